@@ -1,0 +1,3 @@
+from lfdfuse.cli.main import main
+
+main()

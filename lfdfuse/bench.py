@@ -1,0 +1,183 @@
+"""``make bench``: speed of every stage, each beside a baseline measured in the same run.
+
+Prints a table and writes JSON. Ratios to the in-run baseline are what to compare across
+machines; absolute rates depend on a shared, noisy machine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+import orjson
+import shapely
+from shapely.geometry import LineString, Point
+
+from lfdfuse.log import messages as msg
+from lfdfuse.raycast import RayCaster
+from lfdfuse.sensors import LaserParams
+from lfdfuse.simulate import SimulateOptions, simulate
+from lfdfuse.teachers import Leg
+from lfdfuse.world import load_world
+
+
+@dataclass(frozen=True)
+class Row:
+    name: str
+    rate: float
+    unit: str
+    baseline: str
+    baseline_rate: float
+    target: float | None = None
+
+    @property
+    def ratio(self) -> float:
+        return self.rate / self.baseline_rate if self.baseline_rate > 0 else math.inf
+
+
+def rate(fn: Callable[[], int], *, min_s: float = 1.0) -> float:
+    """Items per second of ``fn`` (which returns how many items it did), over at least ``min_s``."""
+    done, t0 = 0, time.perf_counter()
+    while True:
+        done += fn()
+        el = time.perf_counter() - t0
+        if el >= min_s:
+            return done / el
+
+
+def box_map(n_segments: int, seed: int = 0) -> np.ndarray:
+    """A 40 × 30 m hall with axis-aligned boxes: about ``n_segments`` segments."""
+    rng = np.random.default_rng(seed)
+    segs = [[0, 0, 40, 0], [40, 0, 40, 30], [40, 30, 0, 30], [0, 30, 0, 0]]
+    while len(segs) < n_segments:
+        x, y = rng.uniform(1, 38), rng.uniform(1, 28)
+        w, h = rng.uniform(0.2, 1.5), rng.uniform(0.2, 1.5)
+        segs += [[x, y, x + w, y], [x + w, y, x + w, y + h], [x + w, y + h, x, y + h], [x, y + h, x, y]]
+    return np.asarray(segs[:n_segments], dtype=np.float64)
+
+
+def naive_cast(geom: shapely.Geometry, x: float, y: float, angles: np.ndarray, max_range: float) -> np.ndarray:
+    """Per-ray shapely intersection: the straightforward raycaster."""
+    out = np.empty(len(angles))
+    origin = Point(x, y)
+    for i, a in enumerate(angles):
+        ray = LineString([(x, y), (x + max_range * math.cos(a), y + max_range * math.sin(a))])
+        hit = ray.intersection(geom)
+        out[i] = max_range if hit.is_empty else min(max_range, origin.distance(hit))
+    return out
+
+
+def bench_raycast(rows: list[Row]) -> None:
+    angles = LaserParams().geometry.angles
+    for n in (50, 200, 1000):
+        segs = box_map(n)
+        rc = RayCaster(segs, max_range_m=8.0)
+        geom = shapely.MultiLineString([((a, b), (c, d)) for a, b, c, d in segs])
+        rng = np.random.default_rng(1)
+        poses = rng.uniform([1, 1, -np.pi], [39, 29, np.pi], (500, 3))
+
+        def fast() -> int:
+            for x, y, th in poses:
+                rc.cast(x, y, angles + th)
+            return len(poses)
+
+        def naive() -> int:
+            for x, y, th in poses[:3]:
+                naive_cast(geom, x, y, angles + th, 8.0)
+            return 3
+
+        rows.append(Row(f"laser scans, {n} segments", rate(fast), "scans/s", "per-ray shapely", rate(naive, min_s=0.5), 5000.0 if n == 200 else None))
+
+
+def bench_simulate(rows: list[Row]) -> None:
+    world = load_world("building")
+    opts = SimulateOptions(world=world, legs=[Leg(None, "keep-left")], teacher_name="keep-left", duration_s=120.0, seed=1)
+    with tempfile.TemporaryDirectory() as d:
+        t0 = time.perf_counter()
+        s = simulate(opts, out=Path(d) / "b.mcap")
+        sps = s.steps / (time.perf_counter() - t0)
+    rows.append(Row("simulate building, all sensors + MCAP", sps, "steps/s", "real time (10 Hz)", 10.0, 1000.0))
+
+
+def bench_encoding(rows: list[Row]) -> None:
+    rng = np.random.default_rng(0)
+    geom = LaserParams().geometry
+    scans = rng.uniform(0, 8, (200, 181))
+
+    def with_orjson() -> int:
+        for r in scans:
+            orjson.dumps(msg.laser_scan(0, r, geom))
+        return len(scans)
+
+    def with_json_full() -> int:
+        for r in scans:
+            m = msg.laser_scan(0, r, geom)
+            m["ranges"] = r.tolist()
+            json.dumps(m).encode()
+        return len(scans)
+
+    rows.append(Row("scan JSON encoding (orjson, mm)", rate(with_orjson, min_s=0.5), "msgs/s", "json, full precision", rate(with_json_full, min_s=0.5)))
+
+
+BENCHES: dict[str, Callable[[list[Row]], None]] = {
+    "raycast": bench_raycast,
+    "simulate": bench_simulate,
+    "encoding": bench_encoding,
+}
+
+
+def register(name: str) -> Callable[[Callable[[list[Row]], None]], Callable[[list[Row]], None]]:
+    def deco(fn: Callable[[list[Row]], None]) -> Callable[[list[Row]], None]:
+        BENCHES[name] = fn
+        return fn
+
+    return deco
+
+
+def render(rows: list[Row]) -> str:
+    head = f"{'benchmark':44} {'rate':>12} {'unit':10} {'baseline':24} {'baseline rate':>13} {'ratio':>8} {'target':>8}"
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        tgt = "" if r.target is None else ("ok " if r.rate >= r.target else "MISS ") + f"{r.target:g}"
+        lines.append(f"{r.name:44} {r.rate:12.1f} {r.unit:10} {r.baseline:24} {r.baseline_rate:13.1f} {r.ratio:8.1f} {tgt:>8}")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--out", default="build/bench.json")
+    ap.add_argument("--only", nargs="*", default=None, help=f"subset of: {', '.join(BENCHES)}")
+    args = ap.parse_args(argv)
+    _load_plugins()
+    rows: list[Row] = []
+    for name, fn in BENCHES.items():
+        if args.only is None or name in args.only:
+            fn(rows)
+    sys.stdout.write(render(rows) + "\n")
+    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+    Path(args.out).write_text(json.dumps([asdict(r) | {"ratio": r.ratio} for r in rows], indent=1) + "\n")
+    return 0
+
+
+def _load_plugins() -> None:
+    """Stages that land later register their benchmarks in their own bench modules."""
+    import importlib
+
+    for mod in ("lfdfuse.bench_stages",):
+        try:
+            importlib.import_module(mod)
+        except ModuleNotFoundError as exc:
+            if exc.name != mod:
+                raise
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,280 @@
+"""Scripted teachers (DESIGN §9): find the way over the map and hold a lateral style.
+
+A style teacher is deliberately *not* built from the behaviour primitives: it plans over the
+free-space grid (:mod:`lfdfuse.planner`), follows the path's tangent, and corrects its heading
+from the side laser beams to keep its style (left, centre, right, slalom) or swerves around
+obstacles on a chosen side. Imperfection is human-like and seeded: correlated heading noise and
+a reaction delay of a few control periods.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from lfdfuse.drive import DriveParams, heading_to_command
+from lfdfuse.errors import ConfigError
+from lfdfuse.planner import Planner
+from lfdfuse.robot import Pose, wrap_angle
+from lfdfuse.sensors import CameraParams, Reading, ScanGeometry, target_reached
+from lfdfuse.world import World
+
+STYLES = ("keep-left", "keep-center", "keep-right", "slalom", "pass-left", "pass-right")
+
+
+@dataclass(frozen=True)
+class TeacherParams:
+    """How the scripted teacher drives."""
+
+    wall_distance_m: float = 0.6  # keep-left/right: distance of the robot centre to its wall
+    side_sight_m: float = 2.0  # a side wall farther than this is ignored (door, junction)
+    lateral_gain: float = 1.2  # rad of heading correction per metre of lateral error
+    max_correction_rad: float = math.radians(35.0)
+    slalom_amplitude_m: float = 0.45
+    slalom_period_m: float = 6.0
+    pass_clearance_m: float = 0.45  # gap between robot disc and obstacle when passing
+    approach_m: float = 2.5  # steer straight at a visible target closer than this
+    waypoint_reach_m: float = 1.0
+    heading_noise_rad: float = math.radians(5.0)  # std of the correlated heading noise
+    noise_correlation: float = 0.8  # AR(1) coefficient per control period
+    delay_steps: int = 1  # reaction delay in control periods
+    side_sector_rad: float = math.radians(50.0)  # half width of the side sectors
+    lookahead_m: float = 0.7  # the strip ahead that must be free of returns
+    strip_halfwidth_m: float = 0.32  # half width of that strip (robot radius + margin)
+
+
+@dataclass(frozen=True)
+class Leg:
+    """One part of a task: reach ``target`` (or tour when None) in ``style``."""
+
+    target: str | None
+    style: str
+
+
+def parse_style(name: str) -> str:
+    if name not in STYLES:
+        raise ConfigError(f"unknown teacher style {name!r} (built-in styles: {', '.join(STYLES)})")
+    return name
+
+
+def parse_task(data: Any, *, origin: str) -> list[Leg]:
+    """Validate a task mapping ``{task: [{target, style}, ...]}``."""
+    if not isinstance(data, dict) or set(data) != {"task"}:
+        keys = sorted(set(data) - {"task"}) if isinstance(data, dict) else []
+        extra = f": unknown key {keys[0]!r}" if keys else ""
+        raise ConfigError(f"{origin}: a task file is a mapping with one key 'task'{extra}")
+    legs = data["task"]
+    if not isinstance(legs, list) or not legs:
+        raise ConfigError(f"{origin}: 'task' must be a non-empty list of {{target, style}}")
+    out: list[Leg] = []
+    for i, leg in enumerate(legs):
+        if not isinstance(leg, dict):
+            raise ConfigError(f"{origin}: task[{i}] must be a mapping {{target, style}}")
+        bad = sorted(set(leg) - {"target", "style"})
+        if bad:
+            raise ConfigError(f"{origin}: task[{i}]: unknown key {bad[0]!r} (valid: target, style)")
+        if "style" not in leg:
+            raise ConfigError(f"{origin}: task[{i}] needs a 'style'")
+        target = leg.get("target")
+        out.append(Leg(None if target is None else str(target), parse_style(str(leg["style"]))))
+    return out
+
+
+def load_task(path: str) -> list[Leg]:
+    try:
+        text = Path(path).read_text()
+    except OSError as exc:
+        raise ConfigError(f"cannot read task file {path}: {exc.strerror}") from exc
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{path}: malformed YAML") from exc
+    return parse_task(data, origin=path)
+
+
+def side_range(
+    ranges: np.ndarray, geom: ScanGeometry, angle_rad: float, half_width_rad: float = math.radians(8)
+) -> float:
+    """Smallest laser range within ``±half_width`` of a robot-frame angle (max range if none)."""
+    a = geom.angles
+    sel = np.abs(a - angle_rad) <= half_width_rad
+    if not sel.any():
+        return geom.max_range_m
+    return float(ranges[sel].min())
+
+
+class StyleTeacher:
+    """Drives a chain of legs; a leg without target tours the map holding its style."""
+
+    def __init__(
+        self,
+        *,
+        world: World,
+        legs: list[Leg],
+        planner: Planner,
+        geometry: ScanGeometry,
+        camera: CameraParams,
+        drive: DriveParams,
+        rng: np.random.Generator,
+        params: TeacherParams = TeacherParams(),
+    ) -> None:
+        for leg in legs:
+            if leg.target is not None:
+                world.target(leg.target)  # raises naming the missing target
+        self.world, self.legs, self.planner = world, legs, planner
+        self.geometry, self.camera, self.drive = geometry, camera, drive
+        self.rng, self.p = rng, params
+        self.leg_index = 0
+        self.reached: list[tuple[str, int]] = []  # (target, step index)
+        self._noise = 0.0
+        self._turn_sign = 0.0
+        self._queue: deque[float] = deque()
+        self._travelled = 0.0
+        self._last: Pose | None = None
+        self._tour: list[tuple[float, float]] = []
+        self._steps = 0
+        self._obstacles = [self._obstacle_disc(i) for i in range(len(world.obstacles))]
+
+    @property
+    def done(self) -> bool:
+        return self.leg_index >= len(self.legs)
+
+    def _obstacle_disc(self, i: int) -> tuple[float, float, float]:
+        poly = self.world.obstacles[i].polygon()
+        c = poly.centroid
+        r = max(math.hypot(x - c.x, y - c.y) for x, y in poly.exterior.coords)
+        return c.x, c.y, r
+
+    def _tour_point(self, pose: Pose) -> tuple[float, float]:
+        """Next tour waypoint: the targets in turn, or the farthest point and back."""
+        if (
+            self._tour
+            and math.hypot(self._tour[0][0] - pose.x, self._tour[0][1] - pose.y) < self.p.waypoint_reach_m
+        ):
+            self._tour.pop(0)
+        if not self._tour:
+            if len(self.world.targets) >= 2:
+                self._tour = [(t.x, t.y) for t in self.world.targets]
+            else:
+                far = self.planner.farthest(pose.x, pose.y)
+                self._tour = [far, self.planner.farthest(*far)]
+        return self._tour[0]
+
+    def command(self, pose: Pose, reading: Reading) -> tuple[float, float]:
+        """The command ``(v, ω)`` for this control period."""
+        self._steps += 1
+        if self._last is not None:
+            self._travelled += math.hypot(pose.x - self._last.x, pose.y - self._last.y)
+        self._last = pose
+        seen = {d.name: d for d in reading.detections}
+        if not self.done:
+            goal = self.legs[self.leg_index].target
+            if goal is not None and goal in seen and target_reached(seen[goal].range_m, self.camera):
+                self.reached.append((goal, self._steps - 1))
+                self.leg_index += 1
+        if self.done:
+            return 0.0, 0.0
+        leg = self.legs[self.leg_index]
+        desired = self._desired_heading(pose, reading, leg, seen)
+        # correlated heading noise and a reaction delay: a human's imperfection
+        a = self.p.noise_correlation
+        self._noise = a * self._noise + math.sqrt(1 - a * a) * float(
+            self.rng.normal(0.0, self.p.heading_noise_rad)
+        )
+        rel_now = wrap_angle(desired + self._noise)
+        if abs(rel_now) > math.radians(150) and self._turn_sign != 0.0:
+            # turning around: commit to one direction instead of dithering at ±180°
+            rel_now = math.copysign(abs(rel_now), self._turn_sign)
+        self._turn_sign = math.copysign(1.0, rel_now) if abs(rel_now) > math.radians(60) else 0.0
+        self._queue.append(rel_now)
+        rel = self._queue.popleft() if len(self._queue) > self.p.delay_steps else self._queue[0]
+        v, w = heading_to_command(np.array(rel), self.drive)
+        return float(v), float(w)
+
+    def _desired_heading(self, pose: Pose, reading: Reading, leg: Leg, seen: dict[str, Any]) -> float:
+        """Robot-frame heading (rad) the teacher wants now."""
+        if leg.target is not None:
+            det = seen.get(leg.target)
+            if det is not None and det.range_m < self.p.approach_m:
+                return self._safe(float(det.bearing_rad), reading)
+            t = self.world.target(leg.target)
+            gx, gy = t.x, t.y
+        else:
+            gx, gy = self._tour_point(pose)
+        fld = self.planner.field(gx, gy)
+        near = self.planner.follow(pose.x, pose.y, fld, 2)
+        far = self.planner.follow(pose.x, pose.y, fld, 9)
+        tx, ty = far[0] - near[0], far[1] - near[1]
+        if tx == 0.0 and ty == 0.0:
+            tx, ty = gx - pose.x, gy - pose.y
+        path = math.atan2(ty, tx)
+        rel_path = wrap_angle(path - pose.theta)
+        aim = self._pass_obstacle(pose, path, leg.style)
+        if aim is not None:
+            return self._safe(wrap_angle(math.atan2(aim[1] - pose.y, aim[0] - pose.x) - pose.theta), reading)
+        return self._safe(rel_path + self._lateral(reading, leg.style), reading)
+
+    def _safe(self, rel: float, reading: Reading) -> float:
+        """The free direction nearest ``rel``: a person does not drive into a wall.
+
+        A direction is free when no laser return lies in the strip ahead of the robot along it
+        (``lookahead`` long, robot radius + margin wide). With no free direction within ±90°,
+        the teacher turns on the spot toward ``rel``.
+        """
+        p = self.p
+        offsets = np.radians(np.arange(0.0, 91.0, 5.0))
+        cands = np.concatenate([[rel], rel + np.column_stack([offsets[1:], -offsets[1:]]).ravel()])
+        if rel < 0:  # try the side of the wanted turn first on ties
+            cands = np.concatenate([[rel], rel + np.column_stack([-offsets[1:], offsets[1:]]).ravel()])
+        diff = self.geometry.angles[None, :] - cands[:, None]
+        r = reading.ranges_m[None, :]
+        along = r * np.cos(diff)
+        lateral = np.abs(r * np.sin(diff))
+        blocked = ((along > 0) & (along < p.lookahead_m) & (lateral < p.strip_halfwidth_m)).any(axis=1)
+        free = np.nonzero(~blocked)[0]
+        if len(free) == 0:
+            return math.copysign(math.pi / 2 + 0.3, rel if rel != 0.0 else 1.0)
+        return float(cands[free[0]])
+
+    def _lateral(self, reading: Reading, style: str) -> float:
+        p = self.p
+        # the nearest return in a wide side sector: corners are rounded at the style's distance
+        left = side_range(reading.ranges_m, self.geometry, math.pi / 2, p.side_sector_rad)
+        right = side_range(reading.ranges_m, self.geometry, -math.pi / 2, p.side_sector_rad)
+        see_l, see_r = left < p.side_sight_m, right < p.side_sight_m
+        err = 0.0  # positive: the robot should move to its left
+        if style == "keep-left" and see_l:
+            err = left - p.wall_distance_m
+        elif style == "keep-right" and see_r:
+            err = p.wall_distance_m - right
+        elif style in ("keep-center", "pass-left", "pass-right") and see_l and see_r:
+            err = (left - right) / 2
+        elif style == "slalom" and see_l and see_r:
+            want = p.slalom_amplitude_m * math.sin(2 * math.pi * self._travelled / p.slalom_period_m)
+            err = want - (right - left) / 2
+        return float(np.clip(p.lateral_gain * err, -p.max_correction_rad, p.max_correction_rad))
+
+    def _pass_obstacle(self, pose: Pose, path: float, style: str) -> tuple[float, float] | None:
+        """An aim point beside the next obstacle ahead, on the side the style asks for."""
+        if style not in ("pass-left", "pass-right") or not self._obstacles:
+            return None
+        ux, uy = math.cos(path), math.sin(path)
+        side = 1.0 if style == "pass-left" else -1.0
+        best: tuple[float, float] | None = None
+        best_s = math.inf
+        for ox, oy, r in self._obstacles:
+            dx, dy = ox - pose.x, oy - pose.y
+            s = dx * ux + dy * uy
+            lat = ux * dy - uy * dx
+            if -0.2 < s < 3.5 and abs(lat) < r + 1.0 and s < best_s:
+                off = r + 0.25 + self.p.pass_clearance_m
+                # aim beside the obstacle, a little ahead of it so the robot straightens out
+                best = (ox - side * uy * off + ux * 0.4, oy + side * ux * off + uy * 0.4)
+                best_s = s
+        return best

@@ -1,0 +1,265 @@
+"""World files (DESIGN §2): walls, obstacles, targets and a start pose, in metres and radians.
+
+A world is parsed once, at the edge, into a frozen :class:`World`. Geometry is kept as shapely
+objects for exact queries and as a flat ``(S, 4)`` array of segments ``[ax, ay, bx, by]`` for
+the vectorised raycaster.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import shapely
+import yaml
+from shapely.geometry import LineString, MultiLineString, Point, Polygon
+
+from lfdfuse.errors import WorldError
+
+#: Circles become regular polygons with this many sides for the laser and collisions.
+CIRCLE_SIDES = 32
+
+_WORLD_KEYS = {"name", "walls", "obstacles", "targets", "start", "description"}
+_TARGET_KEYS = {"name", "position", "radius", "color"}
+
+#: Colours (r, g, b) of well-known target names, for viewers; others are grey.
+TARGET_COLORS: dict[str, tuple[float, float, float]] = {
+    "red": (0.9, 0.1, 0.1),
+    "green": (0.1, 0.75, 0.2),
+    "blue": (0.15, 0.3, 0.95),
+    "yellow": (0.95, 0.85, 0.1),
+    "orange": (1.0, 0.55, 0.0),
+    "magenta": (0.9, 0.1, 0.9),
+}
+
+
+@dataclass(frozen=True)
+class Target:
+    """A coloured cylinder the camera can see. It does not block the laser or the robot."""
+
+    name: str
+    x: float
+    y: float
+    radius: float = 0.25
+
+    @property
+    def color(self) -> tuple[float, float, float]:
+        return TARGET_COLORS.get(self.name, (0.6, 0.6, 0.6))
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """A circle ``(x, y, radius)`` or a polygon given by its vertices."""
+
+    kind: str  # "circle" or "polygon"
+    circle: tuple[float, float, float] | None = None
+    points: tuple[tuple[float, float], ...] = ()
+
+    def polygon(self) -> Polygon:
+        if self.circle is not None:
+            x, y, r = self.circle
+            ang = np.arange(CIRCLE_SIDES) * (2 * math.pi / CIRCLE_SIDES)
+            return Polygon(np.column_stack([x + r * np.cos(ang), y + r * np.sin(ang)]))
+        return Polygon(self.points)
+
+
+@dataclass(frozen=True)
+class World:
+    """A parsed, validated world. ``segments`` is ``(S, 4)`` float64 ``[ax, ay, bx, by]``."""
+
+    name: str
+    walls: tuple[tuple[tuple[float, float], ...], ...]
+    obstacles: tuple[Obstacle, ...]
+    targets: tuple[Target, ...]
+    start: tuple[float, float, float]
+    description: str = ""
+    source: str = ""  # the YAML text the world was parsed from (attached to logs)
+    segments: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)), repr=False, compare=False)
+
+    @property
+    def target_names(self) -> list[str]:
+        return [t.name for t in self.targets]
+
+    def target(self, name: str) -> Target:
+        for t in self.targets:
+            if t.name == name:
+                return t
+        raise WorldError(
+            f"world {self.name!r} has no target {name!r} (it has: {', '.join(self.target_names) or 'none'})"
+        )
+
+    def geometry(self) -> MultiLineString:
+        """All walls and obstacle outlines as one shapely geometry (exact reference)."""
+        return MultiLineString([tuple(map(tuple, s.reshape(2, 2))) for s in self.segments])
+
+    def bounds(self) -> tuple[float, float, float, float]:
+        s = self.segments
+        xs = np.concatenate([s[:, 0], s[:, 2]])
+        ys = np.concatenate([s[:, 1], s[:, 3]])
+        return float(xs.min()), float(ys.min()), float(xs.max()), float(ys.max())
+
+    def clearance(self, x: float, y: float) -> float:
+        """Exact distance (m) from a point to the nearest wall or obstacle."""
+        return float(shapely.distance(Point(x, y), self.geometry()))
+
+
+def _segments_from(walls: list[list[tuple[float, float]]], obstacles: list[Obstacle]) -> np.ndarray:
+    segs: list[list[float]] = []
+    for line in walls:
+        for (ax, ay), (bx, by) in zip(line[:-1], line[1:], strict=True):
+            if (ax, ay) != (bx, by):
+                segs.append([ax, ay, bx, by])
+    for ob in obstacles:
+        coords = list(ob.polygon().exterior.coords)
+        for (ax, ay), (bx, by) in zip(coords[:-1], coords[1:], strict=True):
+            segs.append([ax, ay, bx, by])
+    return np.asarray(segs, dtype=np.float64).reshape(-1, 4)
+
+
+def _num(value: Any, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise WorldError(f"{what} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _point(value: Any, what: str) -> tuple[float, float]:
+    if not isinstance(value, (list, tuple)) or len(value) != 2:
+        raise WorldError(f"{what} must be a point [x, y], got {value!r}")
+    return _num(value[0], what), _num(value[1], what)
+
+
+def parse_world(data: Any, *, source: str = "", origin: str = "world") -> World:
+    """Validate a world mapping (as loaded from YAML) into a :class:`World`."""
+    if not isinstance(data, dict):
+        raise WorldError(f"{origin}: a world must be a mapping with 'walls' and 'start'")
+    unknown = sorted(set(data) - _WORLD_KEYS)
+    if unknown:
+        raise WorldError(
+            f"{origin}: unknown key {unknown[0]!r} (valid keys: {', '.join(sorted(_WORLD_KEYS))})"
+        )
+    for key in ("walls", "start"):
+        if key not in data:
+            raise WorldError(f"{origin}: missing key {key!r}")
+    name = str(data.get("name", Path(origin).stem))
+    raw_walls = data["walls"]
+    if not isinstance(raw_walls, list) or not raw_walls:
+        raise WorldError(f"{origin}: 'walls' must be a non-empty list of polylines")
+    walls: list[list[tuple[float, float]]] = []
+    for i, line in enumerate(raw_walls):
+        if not isinstance(line, list) or len(line) < 2:
+            raise WorldError(f"{origin}: walls[{i}] must be a list of at least two [x, y] points")
+        pts = [_point(p, f"walls[{i}][{j}]") for j, p in enumerate(line)]
+        if LineString(pts).length == 0:
+            raise WorldError(f"{origin}: walls[{i}] has zero length")
+        walls.append(pts)
+    obstacles: list[Obstacle] = []
+    for i, ob in enumerate(data.get("obstacles") or []):
+        if not isinstance(ob, dict) or len(ob) != 1 or next(iter(ob)) not in ("circle", "polygon"):
+            raise WorldError(
+                f"{origin}: obstacles[{i}] must be {{circle: [x, y, r]}} or {{polygon: [[x, y], ...]}}"
+            )
+        if "circle" in ob:
+            c = ob["circle"]
+            if not isinstance(c, list) or len(c) != 3:
+                raise WorldError(f"{origin}: obstacles[{i}].circle must be [x, y, radius]")
+            x, y, r = (_num(v, f"obstacles[{i}].circle") for v in c)
+            if r <= 0:
+                raise WorldError(f"{origin}: obstacles[{i}].circle radius must be positive")
+            obstacles.append(Obstacle("circle", circle=(x, y, r)))
+        else:
+            pts = ob["polygon"]
+            if not isinstance(pts, list) or len(pts) < 3:
+                raise WorldError(f"{origin}: obstacles[{i}].polygon needs at least three points")
+            poly_pts = tuple(_point(p, f"obstacles[{i}].polygon") for p in pts)
+            poly = Polygon(poly_pts)
+            if not poly.is_valid or poly.area <= 0:
+                raise WorldError(f"{origin}: obstacles[{i}].polygon is self-intersecting or empty")
+            obstacles.append(Obstacle("polygon", points=poly_pts))
+    targets: list[Target] = []
+    for i, t in enumerate(data.get("targets") or []):
+        if not isinstance(t, dict):
+            raise WorldError(f"{origin}: targets[{i}] must be a mapping")
+        bad = sorted(set(t) - _TARGET_KEYS)
+        if bad:
+            raise WorldError(f"{origin}: targets[{i}]: unknown key {bad[0]!r}")
+        if "name" not in t or "position" not in t:
+            raise WorldError(f"{origin}: targets[{i}] needs 'name' and 'position'")
+        tname = str(t["name"])
+        if not tname.replace("_", "").isalnum():
+            raise WorldError(f"{origin}: targets[{i}] name {tname!r} must be letters, digits and underscores")
+        if tname in [x.name for x in targets]:
+            raise WorldError(f"{origin}: duplicate target name {tname!r}")
+        px, py = _point(t["position"], f"targets[{i}].position")
+        targets.append(Target(tname, px, py, _num(t.get("radius", 0.25), f"targets[{i}].radius")))
+    start = data["start"]
+    if not isinstance(start, list) or len(start) != 3:
+        raise WorldError(f"{origin}: 'start' must be [x, y, theta]")
+    sx, sy, sth = (_num(v, "start") for v in start)
+    segments = _segments_from(walls, obstacles)
+    world = World(
+        name=name,
+        walls=tuple(tuple(w) for w in walls),
+        obstacles=tuple(obstacles),
+        targets=tuple(targets),
+        start=(sx, sy, sth),
+        description=str(data.get("description", "")),
+        source=source,
+        segments=segments,
+    )
+    check_pose_free(world, (sx, sy, sth), what="start pose")
+    return world
+
+
+def check_pose_free(
+    world: World, pose: tuple[float, float, float], *, what: str, radius: float = 0.25
+) -> None:
+    """Raise :class:`WorldError` when a robot disc at ``pose`` touches a wall or obstacle."""
+    x, y, _ = pose
+    d = world.clearance(x, y)
+    if d < radius:
+        raise WorldError(f"{what} ({x:g}, {y:g}) is inside or within {radius:g} m of a wall or obstacle")
+    for ob in world.obstacles:
+        if ob.polygon().contains(Point(x, y)):
+            raise WorldError(f"{what} ({x:g}, {y:g}) is inside an obstacle")
+
+
+def builtin_names() -> list[str]:
+    folder = resources.files("lfdfuse") / "worlds"
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".yaml"))
+
+
+DEFAULT_WORLD = "building"
+
+
+def load_world(name_or_path: str | None) -> World:
+    """Load a built-in world by name, or a YAML file by path."""
+    spec = name_or_path or DEFAULT_WORLD
+    if spec in builtin_names():
+        text = (resources.files("lfdfuse") / "worlds" / f"{spec}.yaml").read_text()
+        origin = spec
+    else:
+        path = Path(spec)
+        if not (spec.endswith((".yaml", ".yml")) or path.exists()):
+            raise WorldError(
+                f"unknown world {spec!r} (built-in worlds: {', '.join(builtin_names())}; or give a YAML path)"
+            )
+        try:
+            text = path.read_text()
+        except OSError as exc:
+            raise WorldError(f"cannot read world file {spec}: {exc.strerror}") from exc
+        origin = str(path)
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark is not None else ""
+        raise WorldError(f"{origin}: malformed YAML{where}") from exc
+    return parse_world(data, source=text, origin=origin)
+
+
+def world_descriptions() -> list[tuple[str, str]]:
+    return [(n, load_world(n).description) for n in builtin_names()]

@@ -1,0 +1,25 @@
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SHARED = ROOT.parent / "shared"
+MCAP_CHECK = SHARED / "tools" / "mcap-check" / "run.sh"
+
+
+def mcap_check(path: Path) -> str:
+    """Run the independent TypeScript MCAP reader/validator; returns its output, fails on problems."""
+    if not MCAP_CHECK.exists() or shutil.which("node") is None:
+        pytest.skip("mcap-check (../shared/tools) or node is not available")
+    res = subprocess.run(["bash", str(MCAP_CHECK), str(path)], capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stdout + res.stderr
+    return res.stdout
+
+
+@pytest.fixture(scope="session")
+def sample_dir() -> Path:
+    return ROOT / "sample_logs"

@@ -1,0 +1,114 @@
+"""The CLI: help everywhere, one-line errors with exit 1, nothing left behind, the real command."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import typer
+from typer.testing import CliRunner
+
+from lfdfuse.cli.main import app
+
+runner = CliRunner()
+
+
+def _commands() -> list[str]:
+    group = typer.main.get_group(app)
+    return sorted(group.commands)
+
+
+def test_every_command_has_help_with_an_example() -> None:
+    for name in _commands():
+        res = runner.invoke(app, [name, "--help"])
+        assert res.exit_code == 0, name
+        assert "Example" in res.output, f"{name} --help has no example"
+
+
+def test_worlds_lists_builtins() -> None:
+    res = runner.invoke(app, ["worlds"])
+    assert res.exit_code == 0
+    for name in ("corridor", "tee", "building", "obstacles"):
+        assert name in res.output
+
+
+def _error(args: list[str], cwd: Path) -> str:
+    before = set(os.listdir(cwd))
+    res = runner.invoke(app, args)
+    assert res.exit_code == 1, res.output
+    lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error: "), res.stderr
+    assert "Traceback" not in res.output
+    assert set(os.listdir(cwd)) == before, "a failed command left a file behind"
+    return lines[0]
+
+
+@pytest.fixture()
+def in_tmp(tmp_path: Path) -> Path:
+    old = os.getcwd()
+    os.chdir(tmp_path)
+    yield tmp_path  # type: ignore[misc]
+    os.chdir(old)
+
+
+def test_simulate_bad_input(in_tmp: Path) -> None:
+    assert "building, corridor, obstacles, tee" in _error(
+        ["simulate", "--world", "mars", "-o", "x.mcap"], in_tmp
+    )
+    (in_tmp / "bad.yaml").write_text("walls: [[[0, 0], [1, 1]]\nstart: [")
+    assert "malformed YAML" in _error(["simulate", "--world", "bad.yaml", "-o", "x.mcap"], in_tmp)
+    (in_tmp / "key.yaml").write_text(
+        "walls: [[[0, 0], [9, 0], [9, 9], [0, 0]]]\nstart: [5, 2, 0]\nfloor: 1\n"
+    )
+    assert "unknown key 'floor'" in _error(["simulate", "--world", "key.yaml", "-o", "x.mcap"], in_tmp)
+    assert "start pose" in _error(["simulate", "--start", "0,0,0", "-o", "x.mcap"], in_tmp)
+    assert "cannot write" in _error(["simulate", "--duration", "2", "-o", "no/such/dir/x.mcap"], in_tmp)
+    assert "unknown teacher style" in _error(["simulate", "--teacher", "zigzag", "-o", "x.mcap"], in_tmp)
+    (in_tmp / "task.yaml").write_text("task:\n  - {target: purple, style: keep-left}\n")
+    assert "no target 'purple'" in _error(["simulate", "--teacher", "task.yaml", "-o", "x.mcap"], in_tmp)
+
+
+def test_unwritable_output_leaves_nothing(in_tmp: Path) -> None:
+    if os.geteuid() == 0:
+        pytest.skip("root can write anywhere")
+    ro = in_tmp / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    _error(["simulate", "--duration", "2", "-o", "ro/x.mcap"], in_tmp)
+
+
+def test_inspect_bad_input(in_tmp: Path) -> None:
+    assert "no such file" in _error(["inspect", "nothing.mcap"], in_tmp)
+    (in_tmp / "junk.mcap").write_bytes(b"not an mcap file at all")
+    assert "not a readable MCAP" in _error(["inspect", "junk.mcap"], in_tmp)
+
+
+def test_simulate_then_inspect(in_tmp: Path) -> None:
+    res = runner.invoke(
+        app,
+        ["simulate", "--world", "corridor", "--teacher", "keep-right", "--duration", "10", "-o", "d.mcap"],
+    )
+    assert res.exit_code == 0, res.output
+    assert "collisions" in res.output and (in_tmp / "d.mcap").exists()
+    res = runner.invoke(app, ["inspect", "d.mcap"])
+    assert res.exit_code == 0
+    assert "/scan" in res.output and "foxglove.LaserScan" in res.output and "101" in res.output
+
+
+def test_the_installed_command_runs(tmp_path: Path) -> None:
+    exe = shutil.which("lfdfuse", path=str(Path(sys.executable).parent)) or shutil.which("lfdfuse")
+    assert exe, "the lfdfuse console script is not installed"
+    out = tmp_path / "x.mcap"
+    res = subprocess.run(
+        [exe, "simulate", "--world", "tee", "--duration", "5", "-o", str(out)], capture_output=True, text=True
+    )
+    assert res.returncode == 0, res.stderr
+    assert out.exists()
+    bad = subprocess.run([exe, "simulate", "--world", "nowhere"], capture_output=True, text=True)
+    assert bad.returncode == 1 and bad.stderr.startswith("error: unknown world 'nowhere'")
+    usage = subprocess.run([exe, "simulate", "--duration", "abc"], capture_output=True, text=True)
+    assert usage.returncode == 2
