@@ -56,7 +56,7 @@ def rate(fn: Callable[[], int], *, min_s: float = 1.0) -> float:
 def box_map(n_segments: int, seed: int = 0) -> np.ndarray:
     """A 40 × 30 m hall with axis-aligned boxes: about ``n_segments`` segments."""
     rng = np.random.default_rng(seed)
-    segs = [[0, 0, 40, 0], [40, 0, 40, 30], [40, 30, 0, 30], [0, 30, 0, 0]]
+    segs: list[list[float]] = [[0, 0, 40, 0], [40, 0, 40, 30], [40, 30, 0, 30], [0, 30, 0, 0]]
     while len(segs) < n_segments:
         x, y = rng.uniform(1, 38), rng.uniform(1, 28)
         w, h = rng.uniform(0.2, 1.5), rng.uniform(0.2, 1.5)
@@ -64,7 +64,9 @@ def box_map(n_segments: int, seed: int = 0) -> np.ndarray:
     return np.asarray(segs[:n_segments], dtype=np.float64)
 
 
-def naive_cast(geom: shapely.Geometry, x: float, y: float, angles: np.ndarray, max_range: float) -> np.ndarray:
+def naive_cast(
+    geom: shapely.Geometry, x: float, y: float, angles: np.ndarray, max_range: float
+) -> np.ndarray:
     """Per-ray shapely intersection: the straightforward raycaster."""
     out = np.empty(len(angles))
     origin = Point(x, y)
@@ -94,17 +96,30 @@ def bench_raycast(rows: list[Row]) -> None:
                 naive_cast(geom, x, y, angles + th, 8.0)
             return 3
 
-        rows.append(Row(f"laser scans, {n} segments", rate(fast), "scans/s", "per-ray shapely", rate(naive, min_s=0.5), 5000.0 if n == 200 else None))
+        rows.append(
+            Row(
+                f"laser scans, {n} segments",
+                rate(fast),
+                "scans/s",
+                "per-ray shapely",
+                rate(naive, min_s=0.5),
+                5000.0 if n == 200 else None,
+            )
+        )
 
 
 def bench_simulate(rows: list[Row]) -> None:
     world = load_world("building")
-    opts = SimulateOptions(world=world, legs=[Leg(None, "keep-left")], teacher_name="keep-left", duration_s=120.0, seed=1)
+    opts = SimulateOptions(
+        world=world, legs=[Leg(None, "keep-left")], teacher_name="keep-left", duration_s=120.0, seed=1
+    )
     with tempfile.TemporaryDirectory() as d:
         t0 = time.perf_counter()
         s = simulate(opts, out=Path(d) / "b.mcap")
         sps = s.steps / (time.perf_counter() - t0)
-    rows.append(Row("simulate building, all sensors + MCAP", sps, "steps/s", "real time (10 Hz)", 10.0, 1000.0))
+    rows.append(
+        Row("simulate building, all sensors + MCAP", sps, "steps/s", "real time (10 Hz)", 10.0, 1000.0)
+    )
 
 
 def bench_encoding(rows: list[Row]) -> None:
@@ -124,30 +139,104 @@ def bench_encoding(rows: list[Row]) -> None:
             json.dumps(m).encode()
         return len(scans)
 
-    rows.append(Row("scan JSON encoding (orjson, mm)", rate(with_orjson, min_s=0.5), "msgs/s", "json, full precision", rate(with_json_full, min_s=0.5)))
+    rows.append(
+        Row(
+            "scan JSON encoding (orjson, mm)",
+            rate(with_orjson, min_s=0.5),
+            "msgs/s",
+            "json, full precision",
+            rate(with_json_full, min_s=0.5),
+        )
+    )
 
 
-BENCHES: dict[str, Callable[[list[Row]], None]] = {
-    "raycast": bench_raycast,
-    "simulate": bench_simulate,
-    "encoding": bench_encoding,
+def _demo(folder: Path, seconds: float) -> Path:
+    """A keep-left building tour of ``seconds`` (the 10-minute demo of the stage benches)."""
+    out = folder / f"demo{int(seconds)}.mcap"
+    if not out.exists():
+        opts = SimulateOptions(
+            world=load_world("building"),
+            legs=[Leg(None, "keep-left")],
+            teacher_name="keep-left",
+            duration_s=seconds,
+            seed=2,
+        )
+        simulate(opts, out=out)
+    return out
+
+
+def bench_behaviors(rows: list[Row], folder: Path) -> None:
+    from lfdfuse.behaviors import compute, resolve_behaviors
+    from lfdfuse.log.reader import read_run
+    from lfdfuse.segment import observations_of
+
+    run = read_run(_demo(folder, 600.0))
+    obs = observations_of(run)
+    for preset, target in (("scenario3", 20000.0), ("full", None)):
+        names = resolve_behaviors(preset, obs.target_names)
+
+        def whole() -> int:
+            compute(obs, names)
+            return len(run)
+
+        def per_scan() -> int:
+            for k in range(200):
+                one = type(obs)(
+                    obs.ranges_m[k : k + 1],
+                    obs.geometry,
+                    None if obs.sonar_m is None else obs.sonar_m[k : k + 1],
+                    obs.sonar_angles_rad,
+                    obs.sonar_max_m,
+                    obs.target_names,
+                    obs.target_bearing_rad[k : k + 1],
+                    obs.target_range_m[k : k + 1],
+                )
+                compute(one, names)
+            return 200
+
+        rows.append(
+            Row(
+                f"behaviour outputs, {preset}, whole log",
+                rate(whole),
+                "scans/s",
+                "per-scan loop",
+                rate(per_scan),
+                target,
+            )
+        )
+
+
+def bench_segment(rows: list[Row], folder: Path) -> None:
+    from lfdfuse.segment import segment_file
+
+    src = _demo(folder, 600.0)
+    t0 = time.perf_counter()
+    segment_file(src, out=folder / "demo600.seg.mcap")
+    el = time.perf_counter() - t0
+    rows.append(Row("segment end to end, 10-minute demo", 600.0 / el, "x realtime", "real time", 1.0))
+    rows.append(Row("segment end to end, 10-minute demo (s)", el, "s", "-", 0.0))
+
+
+BENCHES: dict[str, Callable[[list[Row], Path], None]] = {
+    "raycast": lambda rows, _f: bench_raycast(rows),
+    "simulate": lambda rows, _f: bench_simulate(rows),
+    "encoding": lambda rows, _f: bench_encoding(rows),
+    "behaviors": bench_behaviors,
+    "segment": bench_segment,
 }
-
-
-def register(name: str) -> Callable[[Callable[[list[Row]], None]], Callable[[list[Row]], None]]:
-    def deco(fn: Callable[[list[Row]], None]) -> Callable[[list[Row]], None]:
-        BENCHES[name] = fn
-        return fn
-
-    return deco
 
 
 def render(rows: list[Row]) -> str:
     head = f"{'benchmark':44} {'rate':>12} {'unit':10} {'baseline':24} {'baseline rate':>13} {'ratio':>8} {'target':>8}"
     lines = [head, "-" * len(head)]
     for r in rows:
+        if r.baseline_rate == 0.0:
+            lines.append(f"{r.name:44} {r.rate:12.2f} {r.unit:10}")
+            continue
         tgt = "" if r.target is None else ("ok " if r.rate >= r.target else "MISS ") + f"{r.target:g}"
-        lines.append(f"{r.name:44} {r.rate:12.1f} {r.unit:10} {r.baseline:24} {r.baseline_rate:13.1f} {r.ratio:8.1f} {tgt:>8}")
+        lines.append(
+            f"{r.name:44} {r.rate:12.1f} {r.unit:10} {r.baseline:24} {r.baseline_rate:13.1f} {r.ratio:8.1f} {tgt:>8}"
+        )
     return "\n".join(lines)
 
 
@@ -156,27 +245,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", default="build/bench.json")
     ap.add_argument("--only", nargs="*", default=None, help=f"subset of: {', '.join(BENCHES)}")
     args = ap.parse_args(argv)
-    _load_plugins()
     rows: list[Row] = []
-    for name, fn in BENCHES.items():
-        if args.only is None or name in args.only:
-            fn(rows)
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, fn in BENCHES.items():
+            if args.only is None or name in args.only:
+                fn(rows, Path(tmp))
     sys.stdout.write(render(rows) + "\n")
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(json.dumps([asdict(r) | {"ratio": r.ratio} for r in rows], indent=1) + "\n")
     return 0
-
-
-def _load_plugins() -> None:
-    """Stages that land later register their benchmarks in their own bench modules."""
-    import importlib
-
-    for mod in ("lfdfuse.bench_stages",):
-        try:
-            importlib.import_module(mod)
-        except ModuleNotFoundError as exc:
-            if exc.name != mod:
-                raise
 
 
 if __name__ == "__main__":

@@ -43,15 +43,17 @@ class LaserParams:
         return ScanGeometry(-self.fov_rad / 2, inc, self.beams, self.max_range_m)
 
 
-#: Rear ring of 8 sonars (Pioneer 3DX layout, degrees in the robot frame).
-REAR_SONAR_DEG = (90.0, 130.0, 150.0, 170.0, -170.0, -150.0, -130.0, -90.0)
-
-
 @dataclass(frozen=True)
 class SonarParams:
-    angles_deg: tuple[float, ...] = REAR_SONAR_DEG
+    """A rear ring of sonars evenly spread from +90° round the back to −90° (270°)."""
+
+    count: int = 8
     max_range_m: float = 5.0
     noise_std_m: float = 0.0
+
+    @property
+    def geometry(self) -> ScanGeometry:
+        return ScanGeometry(math.pi / 2, math.pi / (self.count - 1), self.count, self.max_range_m)
 
 
 @dataclass(frozen=True)
@@ -73,7 +75,7 @@ class SensorParams:
     def with_noise(self, std_m: float) -> SensorParams:
         return SensorParams(
             LaserParams(self.laser.beams, self.laser.fov_rad, self.laser.max_range_m, std_m),
-            SonarParams(self.sonar.angles_deg, self.sonar.max_range_m, std_m),
+            SonarParams(self.sonar.count, self.sonar.max_range_m, std_m),
             self.camera,
         )
 
@@ -110,7 +112,7 @@ class Sensors:
         rng = max(params.laser.max_range_m, params.sonar.max_range_m, params.camera.max_range_m)
         self.caster = caster if caster is not None else RayCaster(world.segments, max_range_m=rng)
         self._laser_angles = params.laser.geometry.angles
-        self._sonar_angles = np.radians(np.asarray(params.sonar.angles_deg))
+        self._sonar_angles = params.sonar.geometry.angles
 
     def _ranges(
         self, pose: Pose, angles: np.ndarray, max_m: float, std: float, rng: np.random.Generator

@@ -21,7 +21,7 @@ from lfdfuse.log import LogWriter
 from lfdfuse.log import messages as msg
 from lfdfuse.planner import Planner
 from lfdfuse.robot import Pose, RobotParams, move
-from lfdfuse.sensors import Reading, ScanGeometry, SensorParams, Sensors
+from lfdfuse.sensors import Reading, SensorParams, Sensors
 from lfdfuse.teachers import Leg, StyleTeacher, TeacherParams
 from lfdfuse.world import World, check_pose_free
 
@@ -105,15 +105,9 @@ def run_loop(
     dt_ns = int(round(robot.dt_s * 1e9))
     n_max = int(math.floor(duration_s / robot.dt_s + 1e-9))
     geom = sensors.params.laser.geometry
-    sonar_angles = np.radians(np.asarray(sensors.params.sonar.angles_deg))
     i_left = side_beam_index(geom.angles, math.pi / 2)
     i_right = side_beam_index(geom.angles, -math.pi / 2)
-    sonar_scan = ScanGeometry(
-        float(sonar_angles[0]),
-        float((sonar_angles[-1] % (2 * math.pi) - sonar_angles[0]) / (len(sonar_angles) - 1)),
-        len(sonar_angles),
-        sensors.params.sonar.max_range_m,
-    )
+    sonar_scan = sensors.params.sonar.geometry
     pose = start
     poses = np.zeros((n_max + 1, 3))
     left = np.zeros(n_max + 1)

@@ -4,12 +4,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import typer
 from rich.table import Table
 
+from lfdfuse.behaviors import DEFAULT_PRESET, PRESETS
 from lfdfuse.cli.common import console, progress_bar, user_errors
 from lfdfuse.log.reader import file_info
 from lfdfuse.robot import Pose
+from lfdfuse.segment import Segmentation, bac_summary, read_segmented, segment_file, segmentation_of
 from lfdfuse.simulate import RunSummary, SimulateOptions, simulate
 from lfdfuse.teachers import STYLES, Leg, load_task, parse_style
 from lfdfuse.world import DEFAULT_WORLD, load_world, world_descriptions
@@ -123,6 +126,64 @@ def inspect(file: Path = typer.Argument(..., help="Any MCAP file: an lfdfuse log
         )
     if info.attachments:
         console.print(f"  attachments: {', '.join(info.attachments)}")
+    if "/lfd/segment" in info.channels and "/lfd/behaviors" in info.channels:
+        seg = read_segmented(file)
+        dt = float(np.median(np.diff(seg.t_ns))) / 1e9 if len(seg.t_ns) > 1 else 0.1
+        console.print(f"  segmented with: {', '.join(seg.names)}")
+        _print_segments(segmentation_of(seg), seg.names, dt)
+
+
+def default_out(src: Path, suffix: str) -> Path:
+    name = src.name[:-5] if src.name.endswith(".mcap") else src.name
+    return src.with_name(f"{name}{suffix}.mcap")
+
+
+@app.command("segment")
+@user_errors
+def segment_cmd(
+    src: Path = typer.Argument(..., help="A demonstration log (simulate, teleop or import)."),
+    behaviors: str = typer.Option(
+        DEFAULT_PRESET,
+        "--behaviors",
+        "-b",
+        help=f"A preset ({', '.join(PRESETS)}) or a comma list of behaviour names.",
+    ),
+    out: Path | None = typer.Option(
+        None, "--out", "-o", help="Output MCAP (default: IN with .seg before .mcap)."
+    ),
+) -> None:
+    """Compute the behaviour primitives over a demo, split it at goals and BAC changes.
+
+    Writes every input channel plus /lfd/behaviors, /lfd/demo, /lfd/bac and /lfd/segment.
+
+    Examples:
+      lfdfuse segment demo.mcap
+      lfdfuse segment demo.mcap --behaviors full -o demo.full.seg.mcap
+      lfdfuse segment demo.mcap --behaviors avoid,attract,wander_left,wander_right
+    """
+    target = out or default_out(src, ".seg")
+    with progress_bar("segment"):
+        res = segment_file(src, out=target, behaviors=behaviors)
+    console.print(f"[bold]segment[/bold] {src} → {res.out}")
+    console.print(f"  behaviours: {', '.join(res.names)}")
+    dt = 0.1
+    if len(res.t_ns) > 1:
+        dt = float(np.median(np.diff(res.t_ns))) / 1e9
+    still = int((~res.informative).sum())
+    console.print(f"  {len(res.t_ns)} steps, {still} without heading information (standing still)")
+    _print_segments(res.segmentation, res.names, dt)
+
+
+def _print_segments(segm: Segmentation, names: tuple[str, ...], dt: float) -> None:
+    for seg in segm.segments:
+        bacs = bac_summary(segm, seg)
+        goal = seg.goal or "no goal reached"
+        steps = seg.stop - seg.start
+        console.print(
+            f"  [bold]segment {seg.index}[/bold] → {goal}: {steps * dt:.1f} s, {steps} steps, {len(bacs)} BACs"
+        )
+        cells = [f"{b} ({n})" for b, n, _ in bacs]
+        console.print("    BAC (samples): " + ", ".join(cells), soft_wrap=False)
 
 
 def main() -> None:

@@ -44,6 +44,52 @@ def iter_messages(
 
 
 @dataclass(frozen=True)
+class RawMessage:
+    """A message with its channel and schema exactly as stored (for copying through)."""
+
+    topic: str
+    schema_name: str
+    schema_encoding: str
+    schema_data: bytes
+    message_encoding: str
+    log_time_ns: int
+    publish_time_ns: int
+    data: bytes
+
+
+def iter_raw(path: str | Path, *, exclude_prefix: str | None = None) -> Iterator[RawMessage]:
+    """Every message of a file in log-time order, optionally without topics under a prefix."""
+    with _open(path) as stream:
+        try:
+            reader = make_reader(stream)
+            for schema, channel, message in reader.iter_messages(log_time_order=True):
+                if exclude_prefix is not None and channel.topic.startswith(exclude_prefix):
+                    continue
+                yield RawMessage(
+                    channel.topic,
+                    schema.name if schema else "",
+                    schema.encoding if schema else "",
+                    schema.data if schema else b"",
+                    channel.message_encoding,
+                    message.log_time,
+                    message.publish_time,
+                    message.data,
+                )
+        except (McapError, ValueError, EOFError, OSError, KeyError, AssertionError) as exc:
+            raise LogError(f"{path}: not a readable MCAP file ({exc.__class__.__name__}: {exc})") from exc
+
+
+def iter_attachments(path: str | Path) -> Iterator[tuple[str, str, bytes]]:
+    """``(name, media_type, data)`` of every attachment."""
+    with _open(path) as stream:
+        try:
+            for att in make_reader(stream).iter_attachments():
+                yield att.name, att.media_type, att.data
+        except (McapError, ValueError, EOFError, OSError) as exc:
+            raise LogError(f"{path}: not a readable MCAP file ({exc})") from exc
+
+
+@dataclass(frozen=True)
 class FileInfo:
     """What ``lfdfuse inspect`` shows of any MCAP file."""
 
@@ -183,13 +229,9 @@ def read_run(path: str | Path) -> Run:
     else:
         run_kwargs["detections"] = [() for _ in t]
     world_yaml = None
-    with _open(path) as stream:
-        try:
-            for att in make_reader(stream).iter_attachments():
-                if att.name == "world.yaml":
-                    world_yaml = att.data.decode()
-        except (McapError, ValueError, EOFError, OSError) as exc:
-            raise LogError(f"{path}: not a readable MCAP file ({exc})") from exc
+    for name, _media, data in iter_attachments(path):
+        if name == "world.yaml":
+            world_yaml = data.decode()
     return Run(
         t_ns=t,
         geometry=geom,
@@ -208,4 +250,16 @@ def decode(data: bytes) -> Any:
     return orjson.loads(data)
 
 
-__all__ = ["FileInfo", "Run", "decode", "file_info", "from_stamp", "hold", "iter_messages", "read_run"]
+__all__ = [
+    "FileInfo",
+    "RawMessage",
+    "Run",
+    "decode",
+    "file_info",
+    "from_stamp",
+    "hold",
+    "iter_attachments",
+    "iter_messages",
+    "iter_raw",
+    "read_run",
+]

@@ -6,7 +6,7 @@ import os
 import tempfile
 from pathlib import Path
 from types import TracebackType
-from typing import Any, BinaryIO
+from typing import TYPE_CHECKING, Any, BinaryIO
 
 import orjson
 from mcap.writer import CompressionType, Writer
@@ -14,6 +14,9 @@ from mcap.writer import CompressionType, Writer
 from lfdfuse import __version__
 from lfdfuse.errors import LogError
 from lfdfuse.log.messages import TOPICS
+
+if TYPE_CHECKING:
+    from lfdfuse.log.reader import RawMessage
 from lfdfuse.log.schemas import schema_text
 
 PROVENANCE = "lfdfuse"
@@ -45,7 +48,7 @@ class LogWriter:
         self._stream: BinaryIO | None = None
         self._tmp = ""
         self._writer: Writer | None = None
-        self._schemas: dict[str, int] = {}
+        self._schemas: dict[Any, int] = {}
         self._channels: dict[str, int] = {}
         self._seq: dict[str, int] = {}
 
@@ -92,6 +95,42 @@ class LogWriter:
         self._writer.add_message(
             channel_id=ch, log_time=t_ns, publish_time=t_ns, data=data, sequence=self._seq[topic]
         )
+
+    def copy(self, raw: RawMessage) -> None:
+        """Write a message read from another file, keeping its channel and schema as they were."""
+        assert self._writer is not None
+        key = f"{raw.topic}\0{raw.schema_name}\0{raw.message_encoding}"
+        ch = self._channels.get(key)
+        if ch is None:
+            skey = (raw.schema_name, raw.schema_encoding, raw.schema_data)
+            sid = self._schemas.get(skey)
+            if sid is None:
+                sid = (
+                    self._writer.register_schema(
+                        name=raw.schema_name, encoding=raw.schema_encoding, data=raw.schema_data
+                    )
+                    if raw.schema_name
+                    else 0
+                )
+                self._schemas[skey] = sid
+            ch = self._writer.register_channel(
+                topic=raw.topic, message_encoding=raw.message_encoding, schema_id=sid
+            )
+            self._channels[key] = ch
+            self._seq[key] = 0
+        self._seq[key] += 1
+        self._writer.add_message(
+            channel_id=ch,
+            log_time=raw.log_time_ns,
+            publish_time=raw.publish_time_ns,
+            data=raw.data,
+            sequence=self._seq[key],
+        )
+
+    def add_metadata(self, name: str, data: dict[str, str]) -> None:
+        """An extra metadata record (the provenance record is written on close)."""
+        assert self._writer is not None
+        self._writer.add_metadata(name, data)
 
     def attach(self, name: str, media_type: str, data: bytes) -> None:
         assert self._writer is not None
