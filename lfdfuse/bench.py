@@ -217,12 +217,76 @@ def bench_segment(rows: list[Row], folder: Path) -> None:
     rows.append(Row("segment end to end, 10-minute demo (s)", el, "s", "-", 0.0))
 
 
+def bench_pf(rows: list[Row], folder: Path) -> None:
+    from lfdfuse.estimate.pf import PFParams, reference_step, step
+
+    k, m, n = 30, 1000, 6
+    p = PFParams(particles=m)
+    rng = np.random.default_rng(0)
+    s0 = rng.uniform(0, 1, (k, m, n))
+    v = rng.normal(0, 0.5, (n, 2))
+    vr = np.array([1.0, 0.0])
+    noise = rng.standard_normal((k, m, n))
+    u = rng.uniform(0, 1, k)
+    state = {"s": s0, "w": np.zeros((k, m))}
+
+    def fast() -> int:
+        # fresh random numbers each step, as in the filter (their cost is part of the rate)
+        nz = rng.standard_normal((k, m, n))
+        uu = rng.uniform(0, 1, k)
+        state["s"], state["w"], _ = step(state["s"], state["w"], v, vr, nz, uu, 0.01, p)
+        return k * m
+
+    small = (s0[:1, :200], np.zeros((1, 200)), noise[:1, :200], u[:1])
+
+    def naive() -> int:
+        reference_step(small[0], small[1], v, vr, small[2], small[3], 0.01, p)
+        return 200
+
+    a = step(small[0], small[1], v, vr, small[2], small[3], 0.01, p)
+    b = reference_step(small[0], small[1], v, vr, small[2], small[3], 0.01, p)
+    assert all(np.allclose(x, y) for x, y in zip(a, b, strict=True)), "vectorised and naive steps disagree"
+    rows.append(
+        Row(
+            "particle filter, N=6, M=1000, K=30",
+            rate(fast),
+            "particle-steps/s",
+            "per-particle Python loop",
+            rate(naive),
+            8e6,
+        )
+    )
+
+
+def bench_estimate(rows: list[Row], folder: Path) -> None:
+    from lfdfuse.estimate.pipeline import EstimateOptions, estimate_file
+    from lfdfuse.segment import segment_file
+
+    seg = folder / "demo600.seg.mcap"
+    if not seg.exists():
+        segment_file(_demo(folder, 600.0), out=seg)
+    for trials in (1, 30):
+        t0 = time.perf_counter()
+        estimate_file(seg, out=folder / "f.yaml", opts=EstimateOptions(trials=trials))
+        rows.append(
+            Row(
+                f"estimate end to end, 10-minute demo, K={trials} (s)",
+                time.perf_counter() - t0,
+                "s",
+                "-",
+                0.0,
+            )
+        )
+
+
 BENCHES: dict[str, Callable[[list[Row], Path], None]] = {
     "raycast": lambda rows, _f: bench_raycast(rows),
     "simulate": lambda rows, _f: bench_simulate(rows),
     "encoding": lambda rows, _f: bench_encoding(rows),
     "behaviors": bench_behaviors,
     "segment": bench_segment,
+    "pf": bench_pf,
+    "estimate": bench_estimate,
 }
 
 

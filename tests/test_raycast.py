@@ -65,8 +65,14 @@ def test_random_maps_agree_with_shapely(
     geom = shapely.MultiLineString([((a, b), (c, d)) for a, b, c, d in arr])
     got = float(rc.cast(x, y, np.array([angle]))[0])
     want = _exact(geom, x, y, angle, 8.0)
-    assert got == pytest.approx(want, abs=1e-6)
     assert 0.0 <= got <= 8.0
+    if abs(got - want) > 1e-6:
+        # only a grazing ray may disagree: one that passes a segment end within 1e-9 m, where a
+        # hit and a miss are both right to floating-point precision
+        short = min(got, want)
+        ray = LineString([(x, y), (x + (short + 1e-6) * np.cos(angle), y + (short + 1e-6) * np.sin(angle))])
+        ends = shapely.MultiPoint([p for a, b, c, d in arr for p in ((a, b), (c, d))])
+        assert shapely.distance(ray, ends) < 1e-9, (got, want)
 
 
 def test_clearance_matches_shapely() -> None:

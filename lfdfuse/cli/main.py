@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -10,10 +11,14 @@ from rich.table import Table
 
 from lfdfuse.behaviors import DEFAULT_PRESET, PRESETS
 from lfdfuse.cli.common import console, progress_bar, user_errors
+from lfdfuse.errors import ConfigError
+from lfdfuse.estimate.pf import PFParams
+from lfdfuse.estimate.pipeline import METHODS, EstimateOptions, estimate_file
 from lfdfuse.log.reader import file_info
 from lfdfuse.robot import Pose
 from lfdfuse.segment import Segmentation, bac_summary, read_segmented, segment_file, segmentation_of
 from lfdfuse.simulate import RunSummary, SimulateOptions, simulate
+from lfdfuse.table import FusionTable, Network
 from lfdfuse.teachers import STYLES, Leg, load_task, parse_style
 from lfdfuse.world import DEFAULT_WORLD, load_world, world_descriptions
 
@@ -184,6 +189,113 @@ def _print_segments(segm: Segmentation, names: tuple[str, ...], dt: float) -> No
         )
         cells = [f"{b} ({n})" for b, n, _ in bacs]
         console.print("    BAC (samples): " + ", ".join(cells), soft_wrap=False)
+
+
+_SHORT = {
+    "avoid": "av",
+    "wander": "w",
+    "wander_left": "wL",
+    "wander_right": "wR",
+    "wall_attract": "a",
+    "wall_attract_left": "aL",
+    "wall_attract_right": "aR",
+    "sonar_avoid": "son",
+    "wall_side_left": "sL",
+    "wall_side_right": "sR",
+    "circular_avoid_left": "cL",
+    "circular_avoid_right": "cR",
+}
+
+
+def _abbrev(name: str) -> str:
+    return _SHORT.get(name, name.replace("attract_", ""))
+
+
+def print_table(table: FusionTable) -> None:
+    """Weights (± std), samples and fit error per step and BAC, in percent to fit a terminal."""
+    legend = ", ".join(f"{_abbrev(b)}={b}" for b in table.behaviors)
+    console.print(
+        f"weights and std in % of the row; n = samples (* = too few to trust); fit° = mean heading error\n{legend}"
+    )
+
+    def walk(net: Network, depth: int) -> None:
+        for step in net.steps:
+            goal = f"goal {step.goal}" if step.goal else "no goal"
+            console.print(f"{'  ' * depth}[bold]{step.name}[/bold] ({goal})")
+            if step.network is not None:
+                walk(step.network, depth + 1)
+                continue
+            t = Table(box=None, header_style="bold", pad_edge=False, padding=(0, 1))
+            t.add_column("BAC", justify="right")
+            t.add_column("n", justify="right")
+            t.add_column("fit°", justify="right")
+            for b in table.behaviors:
+                t.add_column(_abbrev(b), justify="right")
+            for row in sorted(step.fusion, key=lambda r: -(r.samples or 0)):
+                cells = []
+                for b in table.behaviors:
+                    if b in row.weights:
+                        sd = (row.std or {}).get(b)
+                        cells.append(
+                            f"{100 * row.weights[b]:.0f}" + (f"±{100 * sd:.0f}" if sd is not None else "")
+                        )
+                    else:
+                        cells.append("")
+                n = f"{row.samples}" + ("*" if row.low_samples else "") if row.samples is not None else ""
+                fit = f"{row.fit_error_deg:.1f}" if row.fit_error_deg is not None else ""
+                t.add_row(str(row.bac), n, fit, *cells)
+            if step.fusion:
+                console.print(t)
+            else:
+                console.print("    (no informative steps: default weights)")
+
+    walk(table.network, 0)
+
+
+@app.command("estimate")
+@user_errors
+def estimate_cmd(
+    src: Path = typer.Argument(..., help="A segmented log (from `lfdfuse segment`)."),
+    method: str = typer.Option(
+        "pf",
+        "--method",
+        "-m",
+        help="pf (particle filter), nnls (least squares) or arbitration (best single behaviour).",
+    ),
+    particles: int = typer.Option(PFParams().particles, "--particles", help="Particles per filter (pf)."),
+    trials: int = typer.Option(
+        1,
+        "--trials",
+        "-k",
+        help="Independent filters (pf) or bootstrap fits (nnls, arbitration); mean and std are reported.",
+    ),
+    likelihood: str = typer.Option(
+        "vonmises", "--likelihood", help="pf likelihood: vonmises (default) or paper (2 - D/2)."
+    ),
+    seed: int = typer.Option(0, "--seed", help="Seed of the filters' random draws."),
+    out: Path = typer.Option(Path("fusion.yaml"), "--out", "-o", help="Output fusion table (YAML)."),
+) -> None:
+    """Estimate fusion weights per goal segment and BAC, and write the behaviour network.
+
+    Rows marked * have fewer samples than can be trusted (low_samples in the YAML).
+
+    Examples:
+      lfdfuse estimate demo.seg.mcap
+      lfdfuse estimate demo.seg.mcap --trials 30 -o fusion.yaml
+      lfdfuse estimate demo.seg.mcap --method nnls -o nnls.yaml
+    """
+    if method not in METHODS:
+        raise ConfigError(f"unknown method {method!r} (valid: {', '.join(METHODS)})")
+    if likelihood not in ("vonmises", "paper"):
+        raise ConfigError(f"unknown likelihood {likelihood!r} (valid: vonmises, paper)")
+    pf = replace(PFParams(), particles=particles, likelihood=likelihood)  # type: ignore[arg-type]
+    opts = EstimateOptions(method=method, trials=trials, seed=seed, pf=pf)  # type: ignore[arg-type]
+    with progress_bar("estimate") as update:
+        res = estimate_file(src, out=out, opts=opts, progress=update)
+    console.print(
+        f"[bold]estimate[/bold] {src} → {res.out}  ({method}, {trials} trial{'s' if trials > 1 else ''}, {res.groups} groups)"
+    )
+    print_table(res.table)
 
 
 def main() -> None:

@@ -1,0 +1,1 @@
+"""Fusion estimation (paper Section IV-B): the particle filter and its baselines."""

@@ -1,0 +1,299 @@
+"""The fusion table (DESIGN §7): a behaviour network with fusion weights per BAC.
+
+Parsed once, at the edge, into frozen dataclasses; validated with errors that name the path of
+the problem (``network.steps[1].fusion[0].weights.avoid: negative weight``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from lfdfuse.behaviors import ATTRACT, BASE_BEHAVIORS
+from lfdfuse.errors import ConfigError
+
+FORMAT = "lfdfuse/fusion-table@1"
+
+
+@dataclass(frozen=True)
+class FusionRow:
+    """Weights for one BAC of one step (``std``, ``samples``, ``fit_error_deg`` from estimate)."""
+
+    bac: int
+    weights: dict[str, float]
+    std: dict[str, float] | None = None
+    samples: int | None = None
+    fit_error_deg: float | None = None
+    low_samples: bool = False
+
+
+@dataclass(frozen=True)
+class Step:
+    """A fusion primitive (``fusion`` rows) or a nested network, with its goal (None: none)."""
+
+    name: str
+    goal: str | None  # target name
+    fusion: tuple[FusionRow, ...] = ()
+    network: Network | None = None
+
+    def row(self, bac: int) -> FusionRow | None:
+        for r in self.fusion:
+            if r.bac == bac:
+                return r
+        return None
+
+
+@dataclass(frozen=True)
+class Network:
+    name: str
+    steps: tuple[Step, ...]
+
+
+@dataclass(frozen=True)
+class FusionTable:
+    behaviors: tuple[str, ...]
+    default_weights: dict[str, float]
+    network: Network
+    estimated_by: dict[str, Any] = field(default_factory=dict)
+
+    def goals(self) -> list[str]:
+        """Every target a goal names, depth first."""
+        out: list[str] = []
+
+        def walk(net: Network) -> None:
+            for s in net.steps:
+                if s.network is not None:
+                    walk(s.network)
+                if s.goal is not None:
+                    out.append(s.goal)
+
+        walk(self.network)
+        return out
+
+    def targets(self) -> list[str]:
+        """Targets the table needs: its attract behaviours and goals."""
+        need = [b[len(ATTRACT) :] for b in self.behaviors if b.startswith(ATTRACT)]
+        for g in self.goals():
+            if g not in need:
+                need.append(g)
+        return need
+
+
+def default_weights_for(behaviors: list[str] | tuple[str, ...]) -> dict[str, float]:
+    """Safe wandering for BACs never seen in training: avoid, plus the wander behaviours."""
+    w: dict[str, float] = {}
+    if "avoid" in behaviors:
+        w["avoid"] = 1.0
+    if "sonar_avoid" in behaviors:
+        w["sonar_avoid"] = 0.5
+    wanders = [b for b in ("wander", "wander_left", "wander_right") if b in behaviors]
+    for b in wanders:
+        w[b] = round(1.0 / len(wanders), 4)
+    if not w:
+        w = {b: 1.0 for b in behaviors}
+    return w
+
+
+# ---------------------------------------------------------------------------- parsing
+
+
+def _req(d: dict[str, Any], key: str, where: str) -> Any:
+    if key not in d:
+        raise ConfigError(f"fusion table: {where}: missing field {key!r}")
+    return d[key]
+
+
+def _keys(d: Any, allowed: set[str], where: str) -> dict[str, Any]:
+    if not isinstance(d, dict):
+        raise ConfigError(f"fusion table: {where} must be a mapping")
+    bad = sorted(set(d) - allowed)
+    if bad:
+        raise ConfigError(
+            f"fusion table: {where}: unknown field {bad[0]!r} (valid: {', '.join(sorted(allowed))})"
+        )
+    return d
+
+
+def _weights(
+    d: Any, behaviors: tuple[str, ...], where: str, *, allow_zero_sum: bool = False
+) -> dict[str, float]:
+    if not isinstance(d, dict) or not d:
+        raise ConfigError(f"fusion table: {where} must be a non-empty mapping of behaviour: weight")
+    out: dict[str, float] = {}
+    for name, val in d.items():
+        if name not in behaviors:
+            raise ConfigError(
+                f"fusion table: {where}: unknown behaviour {name!r} (the table's behaviors: {', '.join(behaviors)})"
+            )
+        if isinstance(val, bool) or not isinstance(val, (int, float)) or not math.isfinite(val):
+            raise ConfigError(f"fusion table: {where}.{name}: weight must be a finite number")
+        if val < 0:
+            raise ConfigError(f"fusion table: {where}.{name}: negative weight {val}")
+        out[str(name)] = float(val)
+    if not allow_zero_sum and sum(out.values()) <= 0:
+        raise ConfigError(f"fusion table: {where}: weights sum to zero")
+    return out
+
+
+def _row(d: Any, behaviors: tuple[str, ...], where: str) -> FusionRow:
+    d = _keys(d, {"bac", "weights", "std", "samples", "fit_error_deg", "low_samples"}, where)
+    bac = _req(d, "bac", where)
+    if isinstance(bac, bool) or not isinstance(bac, int) or bac < 0 or bac >= 1 << len(behaviors):
+        raise ConfigError(f"fusion table: {where}.bac must be an integer in [0, 2^{len(behaviors)})")
+    weights = _weights(_req(d, "weights", where), behaviors, f"{where}.weights", allow_zero_sum=True)
+    for name in weights:
+        if not bac >> behaviors.index(name) & 1:
+            raise ConfigError(
+                f"fusion table: {where}.weights.{name}: behaviour is not applicable in BAC {bac}"
+            )
+    std = None if d.get("std") is None else _weights(d["std"], behaviors, f"{where}.std", allow_zero_sum=True)
+    samples = d.get("samples")
+    if samples is not None and (isinstance(samples, bool) or not isinstance(samples, int) or samples < 0):
+        raise ConfigError(f"fusion table: {where}.samples must be a non-negative integer")
+    fit = d.get("fit_error_deg")
+    return FusionRow(
+        bac, weights, std, samples, None if fit is None else float(fit), bool(d.get("low_samples", False))
+    )
+
+
+def _network(d: Any, behaviors: tuple[str, ...], where: str) -> Network:
+    d = _keys(d, {"name", "steps"}, where)
+    steps_raw = _req(d, "steps", where)
+    if not isinstance(steps_raw, list) or not steps_raw:
+        raise ConfigError(f"fusion table: {where}.steps must be a non-empty list")
+    steps = []
+    for i, s in enumerate(steps_raw):
+        sw = f"{where}.steps[{i}]"
+        s = _keys(s, {"name", "goal", "fusion", "network"}, sw)
+        goal = s.get("goal")
+        if goal is not None:
+            goal = _keys(goal, {"target"}, f"{sw}.goal")
+            goal = str(_req(goal, "target", f"{sw}.goal"))
+        has_f, has_n = "fusion" in s, "network" in s
+        if has_f == has_n:
+            raise ConfigError(f"fusion table: {sw}: give exactly one of 'fusion' or 'network'")
+        if has_n:
+            steps.append(
+                Step(str(_req(s, "name", sw)), goal, (), _network(s["network"], behaviors, f"{sw}.network"))
+            )
+        else:
+            rows_raw = s["fusion"] or []
+            if not isinstance(rows_raw, list):
+                raise ConfigError(f"fusion table: {sw}.fusion must be a list")
+            rows = tuple(_row(r, behaviors, f"{sw}.fusion[{j}]") for j, r in enumerate(rows_raw))
+            if len({r.bac for r in rows}) != len(rows):
+                raise ConfigError(f"fusion table: {sw}.fusion names a BAC twice")
+            steps.append(Step(str(_req(s, "name", sw)), goal, rows))
+    return Network(str(d.get("name", "network")), tuple(steps))
+
+
+def parse_table(data: Any) -> FusionTable:
+    d = _keys(data, {"format", "behaviors", "default_weights", "network", "estimated_by"}, "top level")
+    fmt = _req(d, "format", "top level")
+    if fmt != FORMAT:
+        raise ConfigError(f"fusion table: format must be {FORMAT!r}, got {fmt!r}")
+    beh = _req(d, "behaviors", "top level")
+    if not isinstance(beh, list) or not beh or not all(isinstance(b, str) for b in beh):
+        raise ConfigError("fusion table: behaviors must be a non-empty list of names")
+    for b in beh:
+        if b not in BASE_BEHAVIORS and not (b.startswith(ATTRACT) and len(b) > len(ATTRACT)):
+            raise ConfigError(
+                f"fusion table: unknown behaviour {b!r} in behaviors (valid: {', '.join(BASE_BEHAVIORS)}, attract_<target>)"
+            )
+    if len(set(beh)) != len(beh):
+        raise ConfigError("fusion table: behaviors names a behaviour twice")
+    behaviors = tuple(beh)
+    default = _weights(_req(d, "default_weights", "top level"), behaviors, "default_weights")
+    net = _network(_req(d, "network", "top level"), behaviors, "network")
+    est = d.get("estimated_by") or {}
+    return FusionTable(behaviors, default, net, dict(est) if isinstance(est, dict) else {})
+
+
+def load_table(path: str | Path) -> FusionTable:
+    p = Path(path)
+    try:
+        text = p.read_text()
+    except OSError as exc:
+        raise ConfigError(f"cannot read fusion table {p}: {exc.strerror}") from exc
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{p}: malformed YAML") from exc
+    return parse_table(data)
+
+
+# ---------------------------------------------------------------------------- writing
+
+
+def _r(x: float) -> float:
+    return round(float(x), 4)
+
+
+def _row_dict(r: FusionRow) -> dict[str, Any]:
+    d: dict[str, Any] = {"bac": r.bac, "weights": {k: _r(v) for k, v in r.weights.items()}}
+    if r.std is not None:
+        d["std"] = {k: _r(v) for k, v in r.std.items()}
+    if r.samples is not None:
+        d["samples"] = r.samples
+    if r.fit_error_deg is not None:
+        d["fit_error_deg"] = round(r.fit_error_deg, 2)
+    if r.low_samples:
+        d["low_samples"] = True
+    return d
+
+
+def _net_dict(n: Network) -> dict[str, Any]:
+    steps = []
+    for s in n.steps:
+        d: dict[str, Any] = {"name": s.name, "goal": None if s.goal is None else {"target": s.goal}}
+        if s.network is not None:
+            d["network"] = _net_dict(s.network)
+        else:
+            d["fusion"] = [_row_dict(r) for r in s.fusion]
+        steps.append(d)
+    return {"name": n.name, "steps": steps}
+
+
+def table_dict(t: FusionTable) -> dict[str, Any]:
+    d: dict[str, Any] = {
+        "format": FORMAT,
+        "behaviors": list(t.behaviors),
+        "default_weights": {k: _r(v) for k, v in t.default_weights.items()},
+        "network": _net_dict(t.network),
+    }
+    if t.estimated_by:
+        d["estimated_by"] = t.estimated_by
+    return d
+
+
+def dump_table(t: FusionTable) -> str:
+    return yaml.safe_dump(table_dict(t), sort_keys=False, default_flow_style=None, width=120)
+
+
+def write_table(t: FusionTable, path: str | Path) -> None:
+    """Write atomically: a temp file in the same folder, then rename."""
+    import os
+    import tempfile
+
+    p = Path(path)
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise ConfigError(f"cannot write {p}: folder {parent} does not exist")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=parent)
+    except OSError as exc:
+        raise ConfigError(f"cannot write {p}: {exc.strerror}") from exc
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(dump_table(t))
+        mask = os.umask(0)
+        os.umask(mask)
+        os.chmod(tmp, 0o666 & ~mask)
+        os.replace(tmp, p)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)

@@ -1,0 +1,158 @@
+"""The fusion table: round trips, validation, schema, and estimate on the sample demos."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import jsonschema
+import numpy as np
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from lfdfuse.cli.main import app
+from lfdfuse.errors import ConfigError
+from lfdfuse.estimate.pipeline import EstimateOptions, estimate_file, estimate_run
+from lfdfuse.segment import read_segmented, segment_file
+from lfdfuse.table import dump_table, load_table, parse_table
+from tests.conftest import ROOT
+
+runner = CliRunner()
+SCHEMA = json.loads((ROOT / "schemas" / "fusion-table.schema.json").read_text())
+
+TABLE = {
+    "format": "lfdfuse/fusion-table@1",
+    "behaviors": ["avoid", "attract_red", "wander_left", "wander_right"],
+    "default_weights": {"avoid": 1.0, "wander_left": 0.5, "wander_right": 0.5},
+    "network": {
+        "name": "demo",
+        "steps": [
+            {
+                "name": "reach-red",
+                "goal": {"target": "red"},
+                "fusion": [{"bac": 13, "weights": {"avoid": 0.2, "wander_left": 0.5, "wander_right": 0.3}}],
+            },
+            {
+                "name": "nested",
+                "goal": None,
+                "network": {"name": "sub", "steps": [{"name": "s", "goal": None, "fusion": []}]},
+            },
+        ],
+    },
+}
+
+
+def _mutate(path: list[object], value: object) -> dict:  # type: ignore[type-arg]
+    data = json.loads(json.dumps(TABLE))
+    node = data
+    for key in path[:-1]:
+        node = node[key]
+    if value is KeyError:
+        del node[path[-1]]
+    else:
+        node[path[-1]] = value
+    return data  # type: ignore[no-any-return]
+
+
+def test_round_trip_and_schema() -> None:
+    t = parse_table(TABLE)
+    text = dump_table(t)
+    assert parse_table(yaml.safe_load(text)) == t
+    jsonschema.validate(yaml.safe_load(text), SCHEMA)
+    assert t.targets() == ["red"]
+
+
+@pytest.mark.parametrize(
+    ("path", "value", "message"),
+    [
+        (["behaviors", 1], "attract", "unknown behaviour 'attract'"),
+        (["network", "steps", 0, "fusion", 0, "weights", "avoid"], -0.1, "negative weight"),
+        (["network", "steps", 0, "fusion", 0, "weights", "fly"], 0.1, "unknown behaviour 'fly'"),
+        (["network", "steps", 0, "fusion", 0, "bac"], KeyError, "missing field 'bac'"),
+        (["default_weights"], KeyError, "missing field 'default_weights'"),
+        (["network", "steps", 0, "fusion", 0, "weights", "attract_red"], 0.3, "not applicable in BAC 13"),
+        (["format"], "other@2", "format must be"),
+        (["network", "steps", 0, "speed"], 1, "unknown field 'speed'"),
+    ],
+)
+def test_invalid_tables_are_rejected(path: list[object], value: object, message: str) -> None:
+    bad = _mutate(path, value)
+    with pytest.raises(ConfigError, match=message):
+        parse_table(bad)
+
+
+@pytest.fixture(scope="module")
+def segmented(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("est") / "three.seg.mcap"
+    segment_file(ROOT / "sample_logs" / "three-goals-building.mcap", out=out)
+    return out
+
+
+@pytest.mark.parametrize("method", ["pf", "nnls", "arbitration"])
+def test_estimate_on_the_sample_demo(segmented: Path, tmp_path: Path, method: str) -> None:
+    res = estimate_file(segmented, out=tmp_path / "f.yaml", opts=EstimateOptions(method=method, trials=2))  # type: ignore[arg-type]
+    loaded = load_table(tmp_path / "f.yaml")
+    assert loaded.behaviors == res.table.behaviors
+    jsonschema.validate(yaml.safe_load((tmp_path / "f.yaml").read_text()), SCHEMA)
+    steps = loaded.network.steps
+    assert [s.goal for s in steps[:3]] == ["red", "green", "blue"]
+    assert [s.name for s in steps[:3]] == ["reach-red", "reach-green", "reach-blue"]
+    for s in steps:
+        for row in s.fusion:
+            assert row.fit_error_deg is not None and np.isfinite(row.fit_error_deg)
+            assert sum(row.weights.values()) == pytest.approx(1.0, abs=1e-3)
+            assert row.low_samples == (row.samples is not None and row.samples < 30)
+
+
+def test_styles_show_in_the_learned_weights(segmented: Path) -> None:
+    """Keep-left to red, centre to green, keep-right to blue: the wall-attract weights say so."""
+    table, _, _ = estimate_run(read_segmented(segmented), opts=EstimateOptions())
+
+    def side_weights(step_index: int) -> tuple[float, float]:
+        rows = [r for r in table.network.steps[step_index].fusion if r.samples and r.samples >= 100]
+        tot = sum(r.samples for r in rows)  # type: ignore[misc]
+        left = sum(r.weights.get("wall_attract_left", 0.0) * r.samples for r in rows) / tot  # type: ignore[operator]
+        right = sum(r.weights.get("wall_attract_right", 0.0) * r.samples for r in rows) / tot  # type: ignore[operator]
+        return left, right
+
+    left, right = side_weights(0)
+    assert left > 3 * right
+    left, right = side_weights(2)
+    assert right > 3 * left
+
+
+def test_estimate_is_reproducible(segmented: Path, tmp_path: Path) -> None:
+    for name in ("a", "b"):
+        estimate_file(segmented, out=tmp_path / f"{name}.yaml", opts=EstimateOptions(seed=4, trials=3))
+    assert (tmp_path / "a.yaml").read_text() == (tmp_path / "b.yaml").read_text()
+
+
+def test_estimate_cli(segmented: Path, tmp_path: Path, sample_dir: Path) -> None:
+    out = tmp_path / "f.yaml"
+    res = runner.invoke(
+        app, ["estimate", str(segmented), "-o", str(out), "--trials", "2", "--particles", "200"]
+    )
+    assert res.exit_code == 0, res.output
+    assert "reach-red" in res.output and "fit°" in res.output and out.exists()
+    old = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        before = sorted(os.listdir(tmp_path))
+        bad = runner.invoke(app, ["estimate", str(sample_dir / "keep-left-building.mcap"), "-o", "x.yaml"])
+        assert bad.exit_code == 1 and "run `lfdfuse segment" in bad.stderr
+        bad = runner.invoke(app, ["estimate", str(segmented), "--method", "magic", "-o", "x.yaml"])
+        assert bad.exit_code == 1 and "unknown method 'magic'" in bad.stderr
+        assert sorted(os.listdir(tmp_path)) == before
+    finally:
+        os.chdir(old)
+
+
+def test_all_stationary_gives_no_rows_but_a_valid_table(segmented: Path) -> None:
+    run = read_segmented(segmented)
+    still = type(run)(**{**run.__dict__, "informative": np.zeros_like(run.informative)})
+    table, groups, skipped = estimate_run(still, opts=EstimateOptions())
+    assert groups == skipped > 0
+    assert all(not s.fusion for s in table.network.steps)
+    assert parse_table(yaml.safe_load(dump_table(table))) == table
