@@ -60,7 +60,7 @@ class SonarParams:
 class CameraParams:
     """A colour camera reporting the bearing and range of targets in view and line of sight."""
 
-    fov_rad: float = math.radians(90.0)
+    fov_rad: float = math.radians(120.0)  # a pan-tilt camera (the paper's PTZ) sees wide
     max_range_m: float = 8.0
     #: a target counts as reached when seen closer than this (centre to centre)
     reach_m: float = 0.75

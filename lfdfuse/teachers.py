@@ -22,6 +22,7 @@ from lfdfuse.drive import DriveParams, heading_to_command
 from lfdfuse.errors import ConfigError
 from lfdfuse.planner import Planner
 from lfdfuse.robot import Pose, wrap_angle
+from lfdfuse.safety import SafetyParams, free_heading
 from lfdfuse.sensors import CameraParams, Reading, ScanGeometry, target_reached
 from lfdfuse.world import World
 
@@ -45,8 +46,6 @@ class TeacherParams:
     noise_correlation: float = 0.8  # AR(1) coefficient per control period
     delay_steps: int = 1  # reaction delay in control periods
     side_sector_rad: float = math.radians(50.0)  # half width of the side sectors
-    lookahead_m: float = 0.7  # the strip ahead that must be free of returns
-    strip_halfwidth_m: float = 0.32  # half width of that strip (robot radius + margin)
 
 
 @dataclass(frozen=True)
@@ -130,6 +129,7 @@ class StyleTeacher:
         self.world, self.legs, self.planner = world, legs, planner
         self.geometry, self.camera, self.drive = geometry, camera, drive
         self.rng, self.p = rng, params
+        self.safety = SafetyParams()
         self.leg_index = 0
         self.reached: list[tuple[str, int]] = []  # (target, step index)
         self._noise = 0.0
@@ -221,26 +221,8 @@ class StyleTeacher:
         return self._safe(rel_path + self._lateral(reading, leg.style), reading)
 
     def _safe(self, rel: float, reading: Reading) -> float:
-        """The free direction nearest ``rel``: a person does not drive into a wall.
-
-        A direction is free when no laser return lies in the strip ahead of the robot along it
-        (``lookahead`` long, robot radius + margin wide). With no free direction within ±90°,
-        the teacher turns on the spot toward ``rel``.
-        """
-        p = self.p
-        offsets = np.radians(np.arange(0.0, 91.0, 5.0))
-        cands = np.concatenate([[rel], rel + np.column_stack([offsets[1:], -offsets[1:]]).ravel()])
-        if rel < 0:  # try the side of the wanted turn first on ties
-            cands = np.concatenate([[rel], rel + np.column_stack([-offsets[1:], offsets[1:]]).ravel()])
-        diff = self.geometry.angles[None, :] - cands[:, None]
-        r = reading.ranges_m[None, :]
-        along = r * np.cos(diff)
-        lateral = np.abs(r * np.sin(diff))
-        blocked = ((along > 0) & (along < p.lookahead_m) & (lateral < p.strip_halfwidth_m)).any(axis=1)
-        free = np.nonzero(~blocked)[0]
-        if len(free) == 0:
-            return math.copysign(math.pi / 2 + 0.3, rel if rel != 0.0 else 1.0)
-        return float(cands[free[0]])
+        """The free direction nearest ``rel``: a person does not drive into a wall."""
+        return free_heading(rel, reading.ranges_m, self.geometry.angles, self.safety)
 
     def _lateral(self, reading: Reading, style: str) -> float:
         p = self.p

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import typer
@@ -14,11 +15,12 @@ from lfdfuse.cli.common import console, progress_bar, user_errors
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pf import PFParams
 from lfdfuse.estimate.pipeline import METHODS, EstimateOptions, estimate_file
+from lfdfuse.execute import ExecuteOptions, drive_table, write_report
 from lfdfuse.log.reader import file_info
 from lfdfuse.robot import Pose
 from lfdfuse.segment import Segmentation, bac_summary, read_segmented, segment_file, segmentation_of
 from lfdfuse.simulate import RunSummary, SimulateOptions, simulate
-from lfdfuse.table import FusionTable, Network
+from lfdfuse.table import FusionTable, Network, load_table
 from lfdfuse.teachers import STYLES, Leg, load_task, parse_style
 from lfdfuse.world import DEFAULT_WORLD, load_world, world_descriptions
 
@@ -296,6 +298,78 @@ def estimate_cmd(
         f"[bold]estimate[/bold] {src} → {res.out}  ({method}, {trials} trial{'s' if trials > 1 else ''}, {res.groups} groups)"
     )
     print_table(res.table)
+
+
+def _load_table_arg(path: Path) -> FusionTable:
+    return load_table(path)
+
+
+@app.command("execute")
+@user_errors
+def execute_cmd(
+    table: Path = typer.Argument(
+        ..., help="A fusion table YAML (from `lfdfuse estimate`, or written by hand)."
+    ),
+    world: str = typer.Option(DEFAULT_WORLD, "--world", "-w", help=WORLD_HELP),
+    start: str | None = typer.Option(
+        None, "--start", help="Start pose X,Y,THETA (m, m, rad); default: the world's."
+    ),
+    max_time: float = typer.Option(300.0, "--max-time", help="Stop after this many simulated seconds."),
+    seed: int = typer.Option(0, "--seed", help="Seed of every random draw (sensor noise)."),
+    noise: float = typer.Option(
+        0.0, "--sensor-noise", help="Std (m) of Gaussian range noise on laser and sonar."
+    ),
+    stop_on_collision: bool = typer.Option(
+        False, "--stop-on-collision", help="End the run at the first collision."
+    ),
+    out: Path = typer.Option(
+        Path("run.mcap"), "--out", "-o", help="Run log (MCAP) with the /lfd/* channels and an overlay."
+    ),
+    report: Path | None = typer.Option(None, "--report", help="Write the JSON report here."),
+) -> None:
+    """Let a learned behaviour network drive the robot, log the run and report how it went.
+
+    The run stops when the last goal is achieved or at --max-time.
+
+    Examples:
+      lfdfuse execute fusion.yaml --world building -o run.mcap --report run.json
+      lfdfuse execute fusion.yaml --world tee --start 1,9,0 --max-time 120
+    """
+    w = load_world(world)
+    tab = load_table(table)
+    pose = Pose.parse(start) if start else None
+    opts = ExecuteOptions(
+        world=w,
+        table=tab,
+        table_name=table.name,
+        start=pose,
+        max_time_s=max_time,
+        seed=seed,
+        sensor_noise_m=noise,
+        stop_on_collision=stop_on_collision,
+    )
+    with progress_bar("execute") as update:
+        res = drive_table(opts, out=out, command="execute", progress=update)
+    if report is not None:
+        write_report(res.report, report)
+    print_report(res.report, out=str(out))
+
+
+def print_report(rep: dict[str, Any], *, out: str) -> None:
+    status = "task completed" if rep["completed"] else "task not completed"
+    console.print(
+        f"[bold]execute[/bold] → {out}: {status} in {rep['duration_s']:.1f} s, {rep['path_length_m']:.1f} m, {rep['collisions']} collisions"
+    )
+    for g in rep["goals"]:
+        when = f"at {g['time_s']:.1f} s" if g["reached"] else "not reached"
+        console.print(f"  goal {g['name']} ({g['target']}): {when}")
+    for s in rep["steps"]:
+        console.print(
+            f"  step {s['name']}: side range left {s['left_range_mean_m']:.2f} m, right {s['right_range_mean_m']:.2f} m"
+        )
+    console.print(
+        f"  overall: left {rep['left_range_mean_m']:.2f} m, right {rep['right_range_mean_m']:.2f} m; default weights on {100 * rep['unseen_bac_fraction']:.1f}% of ticks"
+    )
 
 
 def main() -> None:

@@ -160,9 +160,29 @@ def estimate_run(
     if opts.method == "pf":
         est |= {"particles": opts.pf.particles, "likelihood": opts.pf.likelihood}
     table = FusionTable(
-        run.names, default_weights_for(run.names), Network(Path(name).stem.split(".")[0], steps), est
+        run.names, default_weights_of(run, opts), Network(Path(name).stem.split(".")[0], steps), est
     )
     return table, len(groups), skipped
+
+
+def default_weights_of(run: SegmentedRun, opts: EstimateOptions) -> dict[str, float]:
+    """Weights for BACs never seen in training: the teacher's overall style.
+
+    The goal-free behaviours (all but ``attract_*``) are fitted over every informative step of
+    the demonstration at once, so an unseen situation is met in the demonstrated manner rather
+    than by a fixed fallback; when that fit is empty, safe wandering (avoid + wander).
+    """
+    idx = [i for i, n in enumerate(run.names) if not n.startswith("attract_")]
+    steps = np.nonzero(run.informative & run.applicable[:, idx].any(axis=1))[0]
+    fallback = default_weights_for(run.names)
+    if len(idx) == 0 or len(steps) < opts.min_samples:
+        return fallback
+    rng = np.random.default_rng([opts.seed, 1 << 20])
+    w, _ = estimate_group(
+        run.vectors[steps][:, idx, :], run.demo[steps], opts=replace(opts, trials=1), rng=rng
+    )
+    out = {run.names[i]: round(float(x), 4) for i, x in zip(idx, w, strict=True) if x >= 1e-4}
+    return out or fallback
 
 
 def estimate_file(

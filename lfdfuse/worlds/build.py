@@ -57,18 +57,20 @@ def building() -> dict[str, Any]:
         (0, 0, w, 30),  # west corridor
         (40 - w, 0, 40, 30),  # east corridor
         (w, 13.8, 40 - w, 16.2),  # cross corridor: T-junctions on west and east
-        (18.8, w, 21.2, 13.8),  # middle spur: T-junctions on south and cross corridors
+        (18.8, w, 21.2, 30 - w),  # middle corridor: T-junctions on south and north, a crossing
     ]
     return {
         "name": "building",
-        "description": "40 x 30 m floor loop with T and rotated-T junctions and red, green, blue targets (paper Figs. 4 left, 8)",
+        "description": "40 x 30 m floor loop, a cross and a middle corridor (T, rotated-T junctions, a crossing), red, green, blue targets (paper Figs. 4 left, 8)",
         "walls": _walls(rects),
         "targets": [
-            {"name": "red", "position": [38.8, 8.0], "radius": 0.25},
-            {"name": "green", "position": [24.0, 28.8], "radius": 0.25},
-            {"name": "blue", "position": [1.2, 20.0], "radius": 0.25},
+            # the paper's first physical task: keep left to red (first left turn), centre to
+            # green (straight over the crossing), keep right to blue (right at the T, right corner)
+            {"name": "red", "position": [20.0, 8.0], "radius": 0.25},
+            {"name": "green", "position": [20.0, 22.0], "radius": 0.25},
+            {"name": "blue", "position": [38.8, 24.0], "radius": 0.25},
         ],
-        "start": [2.0, 1.2, 0.0],
+        "start": [4.0, 1.2, 0.0],
     }
 
 

@@ -1,0 +1,122 @@
+"""The behaviour network runtime (paper Section III, DESIGN §8).
+
+Each tick: behaviour outputs → the active step (the first step whose goal is not yet achieved;
+a nested network is active until its last goal is achieved) → the BAC of this instant → that
+step's weights for the BAC, or the default weights when the BAC was never seen in training →
+fused vector. Goals are monitored for the active step only, so a task that visits the same
+target twice ("A then B then A") needs it reached twice, in order; a goal once achieved stays
+achieved.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from lfdfuse.behaviors import BehaviorOutputs
+from lfdfuse.table import FusionTable, Network, Step
+
+Path = tuple[int, ...]
+
+
+@dataclass(frozen=True)
+class Decision:
+    """What the network decided at one tick."""
+
+    step: Step | None  # the active fusion step (None: task complete)
+    path: Path  # its position in the (nested) network
+    bac: int
+    weights: dict[str, float]
+    unseen: bool  # True when the BAC had no row and the default weights were used
+    fused: np.ndarray  # (2,) robot-frame fused vector
+    achieved_now: tuple[str, ...]  # goals achieved at this tick (target names)
+
+
+class NetworkRuntime:
+    """Owns the goal state of one execution of a fusion table."""
+
+    def __init__(self, table: FusionTable) -> None:
+        self.table = table
+        self.achieved: set[Path] = set()
+        self._has_goal = bool(table.goals())
+
+    def active(self) -> tuple[Path, Step] | None:
+        """The active fusion step, depth first; None when every goal is achieved."""
+        return self._active(self.table.network, ())
+
+    def _active(self, net: Network, prefix: Path) -> tuple[Path, Step] | None:
+        for i, step in enumerate(net.steps):
+            path = (*prefix, i)
+            if path in self.achieved:
+                continue
+            if step.network is not None:
+                inner = self._active(step.network, path)
+                if inner is None:
+                    self.achieved.add(path)  # the subnetwork finished: the node's goal is met
+                    continue
+                return inner
+            return path, step
+        return None
+
+    @property
+    def complete(self) -> bool:
+        """Every goal achieved (a network without goals runs until stopped)."""
+        if not self._has_goal:
+            return False
+        found = self.active()
+        return found is None or not self._goal_ahead(self.table.network, ())
+
+    def _goal_ahead(self, net: Network, prefix: Path) -> bool:
+        """Whether an unachieved step with a goal remains."""
+        for i, step in enumerate(net.steps):
+            path = (*prefix, i)
+            if path in self.achieved:
+                continue
+            if step.goal is not None:
+                return True
+            if step.network is not None and self._goal_ahead(step.network, path):
+                return True
+        return False
+
+    def decide(self, outputs: BehaviorOutputs, reached: set[str]) -> Decision:
+        """One tick: ``outputs`` of the table's behaviours (N = 1), ``reached`` targets now."""
+        achieved_now: list[str] = []
+        found = self.active()
+        while found is not None and found[1].goal is not None and found[1].goal in reached:
+            self.achieved.add(found[0])
+            achieved_now.append(found[1].goal)
+            found = self.active()
+        bac = int(outputs.bac[0])
+        if found is None or self.complete:
+            return Decision(None, (), bac, {}, False, np.zeros(2), tuple(achieved_now))
+        path, step = found
+        row = step.row(bac)
+        weights = row.weights if row is not None else self.table.default_weights
+        fused = self.fuse(outputs, weights)
+        if row is not None and float(np.hypot(*fused)) <= 1e-9:
+            fused = self.fuse(outputs, self.table.default_weights)
+        return Decision(step, path, bac, dict(weights), row is None, fused, tuple(achieved_now))
+
+    def fuse(self, outputs: BehaviorOutputs, weights: dict[str, float]) -> np.ndarray:
+        names = self.table.behaviors
+        v = np.zeros(2)
+        for name, w in weights.items():
+            v += w * outputs.vectors[0, names.index(name)]
+        return v
+
+
+def step_name_of(path: Path, table: FusionTable) -> str:
+    net: Network = table.network
+    names = []
+    for i in path:
+        step = net.steps[i]
+        names.append(step.name)
+        if step.network is not None:
+            net = step.network
+    return "/".join(names)
+
+
+def heading_of(v: np.ndarray) -> float:
+    return math.atan2(float(v[1]), float(v[0]))

@@ -1,0 +1,39 @@
+"""A reflex below any controller: do not drive into a laser return just ahead.
+
+Both the scripted teacher (a person does not drive into walls) and the behaviour network (a
+real robot's low-level stop) use it. A heading is *free* when no laser return lies in the strip
+ahead of the robot along it, ``lookahead_m`` long and ``halfwidth_m`` to each side. The reflex
+returns the free heading nearest the wanted one (within ±90°), or a turn on the spot toward it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class SafetyParams:
+    lookahead_m: float = 0.7
+    halfwidth_m: float = 0.32  # robot radius + margin
+    step_deg: float = 5.0
+
+
+def free_heading(
+    rel_rad: float, ranges_m: np.ndarray, angles_rad: np.ndarray, p: SafetyParams = SafetyParams()
+) -> float:
+    """The free robot-frame heading nearest ``rel_rad`` (see the module docstring)."""
+    offsets = np.radians(np.arange(p.step_deg, 90.0 + 1e-9, p.step_deg))
+    first, second = (-offsets, offsets) if rel_rad < 0 else (offsets, -offsets)
+    cands = np.concatenate([[rel_rad], rel_rad + np.column_stack([first, second]).ravel()])
+    diff = angles_rad[None, :] - cands[:, None]
+    r = np.where(np.isfinite(ranges_m) & (ranges_m > 0), ranges_m, np.inf)[None, :]
+    along = r * np.cos(diff)
+    lateral = np.abs(r * np.sin(diff))
+    blocked = ((along > 0) & (along < p.lookahead_m) & (lateral < p.halfwidth_m)).any(axis=1)
+    free = np.nonzero(~blocked)[0]
+    if len(free) == 0:
+        return math.copysign(math.pi / 2 + 0.3, rel_rad if rel_rad != 0.0 else 1.0)
+    return float(cands[free[0]])
