@@ -1,0 +1,242 @@
+"""Closed-loop quality: learned networks drive the robot; thresholds measured on real runs.
+
+These are the paper's claims (Section V) as tests: round trip against a known table, style
+transfer from one building to another with the T-junction choice, the sequenced three-goal task
+from perturbed starts, and obstacle negotiation on the demonstrated side.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import orjson
+import pytest
+
+from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
+from lfdfuse.execute import ExecuteOptions, drive_table
+from lfdfuse.log.reader import iter_messages
+from lfdfuse.robot import Pose
+from lfdfuse.roundtrip import heading_errors, weight_errors
+from lfdfuse.segment import read_segmented, segment_file
+from lfdfuse.simulate import SimulateOptions, simulate
+from lfdfuse.table import FusionTable
+from lfdfuse.teachers import Leg
+from lfdfuse.world import load_world
+from tests.conftest import ROOT
+
+
+def learn(tmp: Path, world: str, style: str, *, seed: int, duration: float, name: str) -> FusionTable:
+    demo = tmp / f"{name}.mcap"
+    simulate(
+        SimulateOptions(
+            world=load_world(world),
+            legs=[Leg(None, style)],
+            teacher_name=style,
+            duration_s=duration,
+            seed=seed,
+        ),
+        out=demo,
+    )
+    segment_file(demo, out=tmp / f"{name}.seg.mcap")
+    table, _, _ = estimate_run(read_segmented(tmp / f"{name}.seg.mcap"), opts=EstimateOptions(seed=seed))
+    return table
+
+
+def per_step_sides(run: Path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Laser ranges at +90° and −90° per tick, grouped by the active network step."""
+    steps: dict[int, str] = {}
+    sides: dict[int, tuple[float, float]] = {}
+    for topic, _s, t, data in iter_messages(run, topics=["/lfd/step", "/scan"]):
+        m = orjson.loads(data)
+        if topic == "/lfd/step":
+            if m["step"]:
+                steps[t] = m["step"]
+        else:
+            r = m["ranges"]
+            sides[t] = (r[-1], r[0]) if len(r) == 181 else (math.nan, math.nan)
+    out: dict[str, list[tuple[float, float]]] = {}
+    for t, name in steps.items():
+        out.setdefault(name, []).append(sides[t])
+    return {k: (np.array(v)[:, 0], np.array(v)[:, 1]) for k, v in out.items()}
+
+
+def run_table(
+    tmp: Path,
+    table: FusionTable,
+    world: str,
+    start: tuple[float, float, float] | None,
+    seconds: float,
+    name: str,
+    seed: int = 0,
+) -> dict:  # type: ignore[type-arg]
+    pose = Pose(*start) if start else None
+    res = drive_table(
+        ExecuteOptions(world=load_world(world), table=table, start=pose, max_time_s=seconds, seed=seed),
+        out=tmp / f"{name}.mcap",
+        command="execute",
+    )
+    return {"report": res.report, "poses": res.summary.poses, "log": tmp / f"{name}.mcap"}
+
+
+# ------------------------------------------------------------------ 1. round trip
+
+
+@pytest.fixture(scope="module")
+def round_trip(tmp_path_factory: pytest.TempPathFactory) -> tuple[FusionTable, FusionTable, object, object]:
+    tmp = tmp_path_factory.mktemp("rt")
+    segment_file(ROOT / "sample_logs" / "three-goals-building.mcap", out=tmp / "s.mcap")
+    truth, _, _ = estimate_run(read_segmented(tmp / "s.mcap"), opts=EstimateOptions())
+    runs = []
+    for seed in (11, 12):  # a training and a held-out demonstration of the same teacher
+        opts = ExecuteOptions(
+            world=load_world("building"),
+            table=truth,
+            max_time_s=300,
+            seed=seed,
+            heading_noise_rad=math.radians(5),
+        )
+        drive_table(opts, out=tmp / f"d{seed}.mcap", command="simulate", teacher=True)
+        segment_file(
+            tmp / f"d{seed}.mcap", out=tmp / f"d{seed}.seg.mcap", behaviors=",".join(truth.behaviors)
+        )
+        runs.append(read_segmented(tmp / f"d{seed}.seg.mcap"))
+    learned, _, _ = estimate_run(runs[0], opts=EstimateOptions())
+    return truth, learned, runs[0], runs[1]
+
+
+def test_round_trip_heading_error_is_at_the_noise_floor(round_trip: tuple) -> None:  # type: ignore[type-arg]
+    truth, learned, _train, test = round_trip
+    learned_err = heading_errors(learned, test).mean()
+    true_err = heading_errors(truth, test).mean()
+    assert learned_err <= 1.25 * true_err
+
+
+def test_round_trip_recovers_the_weights_of_well_conditioned_rows(round_trip: tuple) -> None:  # type: ignore[type-arg]
+    truth, learned, _train, _test = round_trip
+    errs = weight_errors(truth, learned, min_samples=50)
+    assert len(errs) >= 4
+    # rows without a target in view (corridor following) are well conditioned
+    plain = [
+        e
+        for e in errs
+        if not any(e.bac >> i & 1 for i, n in enumerate(truth.behaviors) if n.startswith("attract_"))
+    ]
+    assert plain and all(e.l1 <= 0.15 for e in plain), plain
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="rows with a target in view are not identifiable from headings: directions of the weight "
+    "space change the heading by < 0.03 rad per unit weight (see the closing note of issue 5)",
+)
+def test_round_trip_recovers_every_row_with_50_samples(round_trip: tuple) -> None:  # type: ignore[type-arg]
+    truth, learned, _train, _test = round_trip
+    assert all(e.l1 <= 0.15 for e in weight_errors(truth, learned, min_samples=50))
+
+
+# ------------------------------------------------------------------ 2. style transfer
+
+
+@pytest.fixture(scope="module")
+def tee_tables(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[FusionTable]]:
+    tmp = tmp_path_factory.mktemp("tee")
+    return {
+        style: [learn(tmp, "tee", style, seed=seed, duration=300, name=f"{style}{seed}") for seed in (1, 2)]
+        for style in ("keep-left", "keep-right")
+    }
+
+
+CORRIDOR_STARTS = [(10.0, 1.2, 0.0), (38.8, 20.0, -math.pi / 2), (1.2, 25.0, -math.pi / 2)]
+
+
+def test_styles_learned_in_tee_hold_in_building(
+    tee_tables: dict[str, list[FusionTable]], tmp_path: Path
+) -> None:
+    for style, tables in tee_tables.items():
+        for i, table in enumerate(tables):
+            for j, start in enumerate(CORRIDOR_STARTS):
+                rep = run_table(tmp_path, table, "building", start, 60, f"{style}-{i}-{j}")["report"]
+                left, right = rep["left_range_mean_m"], rep["right_range_mean_m"]
+                assert rep["collisions"] == 0
+                if style == "keep-left":
+                    assert left < right, (i, start, rep)
+                else:
+                    assert right < left, (i, start, rep)
+
+
+# heading north up the middle corridor into the T of the north corridor; east up the east corridor
+# into the rotated T of the cross corridor (left or straight)
+T_JUNCTION = (20.0, 20.0, math.pi / 2)
+ROTATED_T = (38.8, 6.0, math.pi / 2)
+
+
+def test_t_junction_choice_follows_the_style(
+    tee_tables: dict[str, list[FusionTable]], tmp_path: Path
+) -> None:
+    for style, tables in tee_tables.items():
+        for i, table in enumerate(tables):
+            end = run_table(tmp_path, table, "building", T_JUNCTION, 40, f"t-{style}-{i}")["poses"][-1]
+            assert end[1] > 27.6  # into the north corridor
+            assert (end[0] < 18.0) if style == "keep-left" else (end[0] > 22.0), (style, end)
+            end = run_table(tmp_path, table, "building", ROTATED_T, 40, f"r-{style}-{i}")["poses"][-1]
+            if style == "keep-left":  # "straight or left": it goes left into the cross corridor
+                assert end[0] < 36.0 and 13.8 < end[1] < 16.2, end
+            else:  # a right-keeper goes straight on
+                assert end[0] > 37.6 and end[1] > 17.0, end
+
+
+# ------------------------------------------------------------------ 3. the sequenced task
+
+
+def test_three_goal_task_from_perturbed_starts(tmp_path: Path) -> None:
+    segment_file(ROOT / "sample_logs" / "three-goals-building.mcap", out=tmp_path / "s.mcap")
+    table, _, _ = estimate_run(read_segmented(tmp_path / "s.mcap"), opts=EstimateOptions())
+    rng = np.random.default_rng(2026)
+    complete = 0
+    for k in range(10):
+        start = (4.0 + rng.uniform(-1.0, 1.0), 1.2 + rng.uniform(-0.35, 0.35), rng.uniform(-0.35, 0.35))
+        run = run_table(tmp_path, table, "building", start, 300, f"seq{k}", seed=k)
+        rep = run["report"]
+        order = [
+            g["target"] for g in sorted((g for g in rep["goals"] if g["reached"]), key=lambda g: g["time_s"])
+        ]
+        ok = rep["completed"] and order == ["red", "green", "blue"] and rep["collisions"] == 0
+        complete += ok
+        if not ok:
+            continue
+        sides = per_step_sides(run["log"])
+        l, r = sides["reach-red"]
+        assert np.median(l) < 0.8 * np.median(r), "keep-left step"
+        l, r = sides["reach-blue"]
+        assert np.median(r) < 0.8 * np.median(l), "keep-right step"
+        l, r = sides["reach-green"]
+        both = (l < 2.0) & (r < 2.0)  # where both walls are in sight
+        assert abs(float(np.median(l[both] - r[both]))) < 0.5, "keep-centre step"
+    assert complete >= 9
+
+
+# ------------------------------------------------------------------ 4. obstacles
+
+
+def passing_sides(poses: np.ndarray, centres: list[tuple[float, float]]) -> list[str]:
+    sides = []
+    for ox, oy in centres:
+        rel = poses[:, 0] - ox
+        for k in np.nonzero(np.sign(rel[:-1]) != np.sign(rel[1:]))[0]:
+            hx, hy = math.cos(poses[k, 2]), math.sin(poses[k, 2])
+            sides.append("left" if hx * (poses[k, 1] - oy) - hy * (poses[k, 0] - ox) > 0 else "right")
+    return sides
+
+
+@pytest.mark.parametrize("style", ["pass-left", "pass-right"])
+def test_obstacles_are_passed_on_the_demonstrated_side(style: str, tmp_path: Path) -> None:
+    world = load_world("obstacles")
+    centres = [(ob.circle[0], ob.circle[1]) for ob in world.obstacles if ob.circle]
+    for seed in (1, 2):
+        table = learn(tmp_path, "obstacles", style, seed=seed, duration=110, name=f"{style}{seed}")
+        run = run_table(tmp_path, table, "obstacles", None, 90, f"o{style}{seed}")
+        sides = passing_sides(run["poses"], centres)
+        assert len(sides) >= 3 and set(sides) == {style.split("-")[1]}, sides
+        assert run["report"]["collisions"] == 0
