@@ -16,9 +16,17 @@ install: $(VENV)/.installed
 
 demo: install
 	@mkdir -p $(DEMO)
-	$(LFD) worlds
-	$(LFD) simulate --world building --teacher keep-left --duration 240 --seed 1 -o $(DEMO)/demo.mcap
-	$(LFD) inspect $(DEMO)/demo.mcap
+	@echo "== 1. a keep-left demonstration in the default world, learned, run in another building (tee)"
+	$(LFD) simulate --teacher keep-left --duration 240 --seed 1 -o $(DEMO)/left.mcap
+	$(LFD) segment $(DEMO)/left.mcap --behaviors avoid,wander_left,wander_right,wall_attract_left,wall_attract_right,sonar_avoid
+	$(LFD) estimate $(DEMO)/left.seg.mcap -o $(DEMO)/left.yaml
+	$(LFD) execute $(DEMO)/left.yaml --world tee --start 1,9,0 --max-time 120 -o $(DEMO)/left-run.mcap --report $(DEMO)/left-run.json
+	@echo "== 2. the paper's three-goal task (left to red, centre to green, right to blue), learned once, run from another start"
+	$(LFD) simulate --teacher sample_logs/three-goals.task.yaml --duration 400 --seed 1 -o $(DEMO)/task.mcap
+	$(LFD) segment $(DEMO)/task.mcap
+	$(LFD) estimate $(DEMO)/task.seg.mcap -o $(DEMO)/task.yaml
+	$(LFD) execute $(DEMO)/task.yaml --start 3.5,1.0,0.2 --max-time 300 -o $(DEMO)/task-run.mcap --report $(DEMO)/task-run.json
+	@echo "Open $(DEMO)/*-run.mcap in Foxglove or Lichtblick: map, robot, laser and the fusion arrows (/lfd/overlay)."
 
 test: install
 	$(PY) -m pytest

@@ -279,6 +279,55 @@ def bench_estimate(rows: list[Row], folder: Path) -> None:
         )
 
 
+def bench_execute(rows: list[Row], folder: Path) -> None:
+    from lfdfuse.estimate.pipeline import EstimateOptions, estimate_file
+    from lfdfuse.execute import ExecuteOptions, drive_table
+    from lfdfuse.segment import segment_file
+    from lfdfuse.table import load_table
+
+    world = load_world("building")
+    legs = [Leg("red", "keep-left"), Leg("green", "keep-center"), Leg("blue", "keep-right")]
+    demo = folder / "task.mcap"
+    t0 = time.perf_counter()
+    s = simulate(
+        SimulateOptions(world=world, legs=legs, teacher_name="task", duration_s=400.0, seed=1), out=demo
+    )
+    sim_rate = s.steps / (time.perf_counter() - t0)
+    segment_file(demo, out=folder / "task.seg.mcap")
+    estimate_file(folder / "task.seg.mcap", out=folder / "task.yaml", opts=EstimateOptions())
+    table = load_table(folder / "task.yaml")
+    t0 = time.perf_counter()
+    r = drive_table(
+        ExecuteOptions(world=world, table=table, max_time_s=300.0), out=folder / "run.mcap", command="execute"
+    )
+    rows.append(
+        Row(
+            "execute building, with /lfd logging",
+            r.summary.steps / (time.perf_counter() - t0),
+            "ticks/s",
+            "simulate, same task",
+            sim_rate,
+            1000.0,
+        )
+    )
+
+
+def bench_demo(rows: list[Row], folder: Path) -> None:
+    import subprocess
+
+    root = Path(__file__).resolve().parents[1]
+    if not (root / "Makefile").exists():
+        return
+    t0 = time.perf_counter()
+    subprocess.run(
+        ["make", "-s", "demo", f"VENV={sys.prefix}", f"DEMO={folder / 'demo'}"],
+        cwd=root,
+        check=True,
+        capture_output=True,
+    )
+    rows.append(Row("make demo pipeline, environment ready (s)", time.perf_counter() - t0, "s", "-", 0.0))
+
+
 BENCHES: dict[str, Callable[[list[Row], Path], None]] = {
     "raycast": lambda rows, _f: bench_raycast(rows),
     "simulate": lambda rows, _f: bench_simulate(rows),
@@ -287,6 +336,8 @@ BENCHES: dict[str, Callable[[list[Row], Path], None]] = {
     "segment": bench_segment,
     "pf": bench_pf,
     "estimate": bench_estimate,
+    "execute": bench_execute,
+    "demo": bench_demo,
 }
 
 

@@ -363,3 +363,28 @@ def write_report(report: dict[str, Any], path: str | Path) -> None:
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def style_of(left_m: float, right_m: float) -> str:
+    """The paper's style measure (Fig. 10) in words: which wall the robot keeps closer to."""
+    if left_m < 0.8 * right_m:
+        return "keeps left"
+    if right_m < 0.8 * left_m:
+        return "keeps right"
+    return "keeps to the centre"
+
+
+def verdict(report: dict[str, Any]) -> str:
+    """One line: task completed (when it has goals) and the style of each step."""
+    parts = []
+    if report["goals"]:
+        done = sum(g["reached"] for g in report["goals"])
+        parts.append(
+            f"task {'completed' if report['completed'] else 'NOT completed'} ({done}/{len(report['goals'])} goals)"
+        )
+    styles = [
+        f"{s['name']} {style_of(s['left_range_mean_m'], s['right_range_mean_m'])}" for s in report["steps"]
+    ]
+    parts.append("; ".join(styles) if styles else "no step ran")
+    parts.append(f"{report['collisions']} collisions")
+    return ", ".join(parts)

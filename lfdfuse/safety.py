@@ -25,6 +25,11 @@ def free_heading(
     rel_rad: float, ranges_m: np.ndarray, angles_rad: np.ndarray, p: SafetyParams = SafetyParams()
 ) -> float:
     """The free robot-frame heading nearest ``rel_rad`` (see the module docstring)."""
+    r1 = np.where(np.isfinite(ranges_m) & (ranges_m > 0), ranges_m, np.inf)
+    d1 = angles_rad - rel_rad
+    along1 = r1 * np.cos(d1)
+    if not ((along1 > 0) & (along1 < p.lookahead_m) & (np.abs(r1 * np.sin(d1)) < p.halfwidth_m)).any():
+        return rel_rad  # the common case: the wanted heading is free
     offsets = np.radians(np.arange(p.step_deg, 90.0 + 1e-9, p.step_deg))
     first, second = (-offsets, offsets) if rel_rad < 0 else (offsets, -offsets)
     cands = np.concatenate([[rel_rad], rel_rad + np.column_stack([first, second]).ravel()])

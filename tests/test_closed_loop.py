@@ -207,13 +207,13 @@ def test_three_goal_task_from_perturbed_starts(tmp_path: Path) -> None:
         if not ok:
             continue
         sides = per_step_sides(run["log"])
-        l, r = sides["reach-red"]
-        assert np.median(l) < 0.8 * np.median(r), "keep-left step"
-        l, r = sides["reach-blue"]
-        assert np.median(r) < 0.8 * np.median(l), "keep-right step"
-        l, r = sides["reach-green"]
-        both = (l < 2.0) & (r < 2.0)  # where both walls are in sight
-        assert abs(float(np.median(l[both] - r[both]))) < 0.5, "keep-centre step"
+        lft, r = sides["reach-red"]
+        assert np.median(lft) < 0.8 * np.median(r), "keep-left step"
+        lft, r = sides["reach-blue"]
+        assert np.median(r) < 0.8 * np.median(lft), "keep-right step"
+        lft, r = sides["reach-green"]
+        both = (lft < 2.0) & (r < 2.0)  # where both walls are in sight
+        assert abs(float(np.median(lft[both] - r[both]))) < 0.5, "keep-centre step"
     assert complete >= 9
 
 

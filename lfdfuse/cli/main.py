@@ -17,7 +17,7 @@ from lfdfuse.cli.common import console, progress_bar, user_errors
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pf import PFParams
 from lfdfuse.estimate.pipeline import METHODS, EstimateOptions, estimate_file
-from lfdfuse.execute import ExecuteOptions, drive_table, write_report
+from lfdfuse.execute import ExecuteOptions, drive_table, verdict, write_report
 from lfdfuse.log.reader import file_info
 from lfdfuse.robot import Pose
 from lfdfuse.segment import Segmentation, bac_summary, read_segmented, segment_file, segmentation_of
@@ -413,6 +413,7 @@ def print_report(rep: dict[str, Any], *, out: str) -> None:
     console.print(
         f"  overall: left {rep['left_range_mean_m']:.2f} m, right {rep['right_range_mean_m']:.2f} m; default weights on {100 * rep['unseen_bac_fraction']:.1f}% of ticks"
     )
+    console.print(f"  [bold]verdict[/bold]: {verdict(rep)}")
 
 
 def main() -> None:
