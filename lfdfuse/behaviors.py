@@ -62,21 +62,7 @@ PRESETS: dict[str, tuple[str, ...]] = {
         "wall_attract_right",
         "sonar_avoid",
     ),
-    "full": (
-        "avoid",
-        "attract",
-        "wander",
-        "wander_left",
-        "wander_right",
-        "wall_attract",
-        "wall_attract_left",
-        "wall_attract_right",
-        "sonar_avoid",
-        "wall_side_left",
-        "wall_side_right",
-        "circular_avoid_left",
-        "circular_avoid_right",
-    ),
+    "full": ("avoid", "attract", *BASE_BEHAVIORS[1:]),
 }
 DEFAULT_PRESET = "scenario3"
 ATTRACT = "attract_"

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import orjson
 
+from lfdfuse.atomic import write_text_atomic
 from lfdfuse.behaviors import BehaviorParams, Observations, compute
 from lfdfuse.drive import heading_to_command
 from lfdfuse.errors import ConfigError
@@ -345,24 +346,7 @@ def drive_table(
 
 
 def write_report(report: dict[str, Any], path: str | Path) -> None:
-    import os
-    import tempfile
-
-    p = Path(path)
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise ConfigError(f"cannot write {p}: folder {parent} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=parent)
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(json.dumps(report, indent=1) + "\n")
-        mask = os.umask(0)
-        os.umask(mask)
-        os.chmod(tmp, 0o666 & ~mask)
-        os.replace(tmp, p)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    write_text_atomic(path, json.dumps(report, indent=1) + "\n")
 
 
 def style_of(left_m: float, right_m: float) -> str:

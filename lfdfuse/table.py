@@ -13,6 +13,7 @@ from typing import Any
 
 import yaml
 
+from lfdfuse.atomic import write_text_atomic
 from lfdfuse.behaviors import ATTRACT, BASE_BEHAVIORS
 from lfdfuse.errors import ConfigError
 
@@ -276,24 +277,4 @@ def dump_table(t: FusionTable) -> str:
 
 def write_table(t: FusionTable, path: str | Path) -> None:
     """Write atomically: a temp file in the same folder, then rename."""
-    import os
-    import tempfile
-
-    p = Path(path)
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise ConfigError(f"cannot write {p}: folder {parent} does not exist")
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=parent)
-    except OSError as exc:
-        raise ConfigError(f"cannot write {p}: {exc.strerror}") from exc
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(dump_table(t))
-        mask = os.umask(0)
-        os.umask(mask)
-        os.chmod(tmp, 0o666 & ~mask)
-        os.replace(tmp, p)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    write_text_atomic(path, dump_table(t))

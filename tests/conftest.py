@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+import os
 import shutil
 import subprocess
 from pathlib import Path
@@ -7,7 +8,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared"
+# the shared folder beside the checkout (real data, mcap-check); LFDFUSE_SHARED overrides it
+SHARED = Path(os.environ.get("LFDFUSE_SHARED", ROOT.parent / "shared"))
 MCAP_CHECK = SHARED / "tools" / "mcap-check" / "run.sh"
 
 

@@ -16,7 +16,7 @@ from lfdfuse.log.schemas import schema
 from lfdfuse.simulate import SimulateOptions, simulate
 from lfdfuse.teachers import Leg
 from lfdfuse.world import load_world
-from tests.conftest import ROOT, mcap_check
+from tests.conftest import ROOT, SHARED, mcap_check
 
 
 @pytest.fixture(scope="module")
@@ -83,7 +83,7 @@ def test_same_seed_gives_byte_identical_files(tmp_path: Path) -> None:
 
 
 def test_file_info_reads_a_real_ros2_bag() -> None:
-    bag = ROOT.parent / "shared" / "realdata" / "ros2" / "macfirst_floor_take_2.mcap"
+    bag = SHARED / "realdata" / "ros2" / "macfirst_floor_take_2.mcap"
     if not bag.exists():
         pytest.skip("shared real data not present")
     info = file_info(bag)
@@ -97,3 +97,15 @@ def test_independent_reader_accepts_our_files(demo: tuple[Path, object]) -> None
     assert report["ok"] and report["outOfOrder"] == 0
     assert report["metadata"] == ["lfdfuse"] and report["attachments"] == ["world.yaml"]
     assert report["schemas"]["/scan"] == "foxglove.LaserScan"
+
+
+def test_sample_logs_are_what_the_code_generates(tmp_path: Path) -> None:
+    from lfdfuse.samples import generate
+
+    for made in generate(tmp_path):
+        shipped = ROOT / "sample_logs" / made.name
+        assert shipped.read_bytes() == made.read_bytes(), f"run `make sample-logs` ({made.name})"
+        assert shipped.stat().st_size < 2_000_000
+    assert (ROOT / "sample_logs" / "three-goals.task.yaml").read_text() == (
+        tmp_path / "three-goals.task.yaml"
+    ).read_text()

@@ -12,6 +12,7 @@ import orjson
 from mcap.writer import CompressionType, Writer
 
 from lfdfuse import __version__
+from lfdfuse.atomic import umask
 from lfdfuse.errors import LogError
 from lfdfuse.log.messages import TOPICS
 
@@ -20,12 +21,6 @@ if TYPE_CHECKING:
 from lfdfuse.log.schemas import schema_text
 
 PROVENANCE = "lfdfuse"
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 class LogWriter:
@@ -146,7 +141,7 @@ class LogWriter:
                 self._writer.finish()
             self._stream.close()
             if exc_type is None:
-                os.chmod(self._tmp, 0o666 & ~_umask())
+                os.chmod(self._tmp, 0o666 & ~umask())
                 os.replace(self._tmp, self.path)
         except OSError as err:
             raise LogError(f"cannot write {self.path}: {err.strerror}") from err
