@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -168,7 +168,6 @@ class SegmentResult:
     t_ns: np.ndarray
     informative: np.ndarray
     out: str
-    extra: dict[str, str] = field(default_factory=dict)
 
 
 def segment_file(

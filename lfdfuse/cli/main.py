@@ -343,10 +343,6 @@ def estimate_cmd(
     print_table(res.table)
 
 
-def _load_table_arg(path: Path) -> FusionTable:
-    return load_table(path)
-
-
 @app.command("execute")
 @user_errors
 def execute_cmd(

@@ -16,7 +16,7 @@ from typing import Literal
 
 import numpy as np
 
-from lfdfuse.errors import ConfigError, LogError
+from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.baselines import angle_errors, arbitration_weights, nnls_weights
 from lfdfuse.estimate.pf import PFParams, normalise, run_filter
 from lfdfuse.segment import SegmentedRun, read_segmented
@@ -193,14 +193,7 @@ def estimate_file(
     progress: Callable[[float, float], None] | None = None,
 ) -> EstimateResult:
     """Read a segmented log, estimate, and write the fusion table to ``out``."""
-    try:
-        run = read_segmented(src)
-    except LogError:
-        raise
+    run = read_segmented(src)
     table, n, skipped = estimate_run(run, opts=opts, name=Path(src).name, progress=progress)
     write_table(table, out)
     return EstimateResult(table, str(out), n, skipped)
-
-
-def with_particles(opts: EstimateOptions, particles: int) -> EstimateOptions:
-    return replace(opts, pf=replace(opts.pf, particles=particles))
