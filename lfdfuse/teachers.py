@@ -205,6 +205,10 @@ class StyleTeacher:
                 return self._safe(float(det.bearing_rad), reading)
             t = self.world.target(leg.target)
             gx, gy = t.x, t.y
+        elif leg.style in ("keep-left", "keep-right"):
+            # touring while keeping to one side: follow that wall, into every opening on it,
+            # as a person told "keep left" would (a planner's route would also turn the other way)
+            return self._safe(self._wall_follow(reading, 1.0 if leg.style == "keep-left" else -1.0), reading)
         else:
             gx, gy = self._tour_point(pose)
         fld = self.planner.field(gx, gy)
@@ -223,6 +227,24 @@ class StyleTeacher:
     def _safe(self, rel: float, reading: Reading) -> float:
         """The free direction nearest ``rel``: a person does not drive into a wall."""
         return free_heading(rel, reading.ranges_m, self.geometry.angles, self.safety)
+
+    def _wall_follow(self, reading: Reading, side: float) -> float:
+        """Heading along the wall on ``side`` (+1 left, −1 right) at the style's distance."""
+        p = self.p
+        a = self.geometry.angles
+        r = reading.ranges_m
+        sel = (side * a > math.radians(15)) & (side * a <= math.pi / 2 + 1e-9)
+        if not sel.any():
+            return 0.0
+        rs, as_ = r[sel], a[sel]
+        k = int(np.argmin(rs))
+        if rs[k] > p.side_sight_m:
+            return side * math.radians(50)  # the wall ends: turn into the opening
+        tangent = float(as_[k]) - side * math.pi / 2  # along the wall, forward
+        err = float(rs[k]) - p.wall_distance_m  # > 0: too far, turn toward the wall
+        return tangent + side * float(
+            np.clip(p.lateral_gain * err, -p.max_correction_rad, p.max_correction_rad)
+        )
 
     def _lateral(self, reading: Reading, style: str) -> float:
         p = self.p
