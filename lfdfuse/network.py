@@ -2,8 +2,8 @@
 
 Each tick: behaviour outputs → the active step (the first step whose goal is not yet achieved;
 a nested network is active until its last goal is achieved) → the BAC of this instant → that
-step's weights for the BAC, or the default weights when the BAC was never seen in training →
-fused vector. Goals are monitored for the active step only, so a task that visits the same
+step's weights for the BAC, or the default weights when the BAC was never seen in training (the
+step's own ``default_weights`` when it has them, else the table's) → fused vector. Goals are monitored for the active step only, so a task that visits the same
 target twice ("A then B then A") needs it reached twice, in order; a goal once achieved stays
 achieved.
 """
@@ -93,10 +93,11 @@ class NetworkRuntime:
             return Decision(None, (), bac, {}, False, np.zeros(2), tuple(achieved_now))
         path, step = found
         row = step.row(bac)
-        weights = row.weights if row is not None else self.table.default_weights
+        fallback = step.default_weights if step.default_weights is not None else self.table.default_weights
+        weights = row.weights if row is not None else fallback
         fused = self.fuse(outputs, weights)
         if row is not None and float(np.hypot(*fused)) <= 1e-9:
-            fused = self.fuse(outputs, self.table.default_weights)
+            fused = self.fuse(outputs, fallback)
         return Decision(step, path, bac, dict(weights), row is None, fused, tuple(achieved_now))
 
     def fuse(self, outputs: BehaviorOutputs, weights: dict[str, float]) -> np.ndarray:

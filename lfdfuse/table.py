@@ -40,6 +40,8 @@ class Step:
     goal: str | None  # target name
     fusion: tuple[FusionRow, ...] = ()
     network: Network | None = None
+    #: this step's weights for BACs it never saw (an extension; else the table's default_weights)
+    default_weights: dict[str, float] | None = None
 
     def row(self, bac: int) -> FusionRow | None:
         for r in self.fusion:
@@ -169,7 +171,7 @@ def _network(d: Any, behaviors: tuple[str, ...], where: str) -> Network:
     steps = []
     for i, s in enumerate(steps_raw):
         sw = f"{where}.steps[{i}]"
-        s = _keys(s, {"name", "goal", "fusion", "network"}, sw)
+        s = _keys(s, {"name", "goal", "fusion", "network", "default_weights"}, sw)
         goal = s.get("goal")
         if goal is not None:
             goal = _keys(goal, {"target"}, f"{sw}.goal")
@@ -188,7 +190,9 @@ def _network(d: Any, behaviors: tuple[str, ...], where: str) -> Network:
             rows = tuple(_row(r, behaviors, f"{sw}.fusion[{j}]") for j, r in enumerate(rows_raw))
             if len({r.bac for r in rows}) != len(rows):
                 raise ConfigError(f"fusion table: {sw}.fusion names a BAC twice")
-            steps.append(Step(str(_req(s, "name", sw)), goal, rows))
+            sd = s.get("default_weights")
+            sdw = None if sd is None else _weights(sd, behaviors, f"{sw}.default_weights")
+            steps.append(Step(str(_req(s, "name", sw)), goal, rows, None, sdw))
     return Network(str(d.get("name", "network")), tuple(steps))
 
 
@@ -254,6 +258,8 @@ def _net_dict(n: Network) -> dict[str, Any]:
         if s.network is not None:
             d["network"] = _net_dict(s.network)
         else:
+            if s.default_weights is not None:
+                d["default_weights"] = {k: _r(v) for k, v in s.default_weights.items()}
             d["fusion"] = [_row_dict(r) for r in s.fusion]
         steps.append(d)
     return {"name": n.name, "steps": steps}

@@ -32,6 +32,7 @@ TABLE = {
             {
                 "name": "reach-red",
                 "goal": {"target": "red"},
+                "default_weights": {"avoid": 0.1, "wander_left": 0.9},
                 "fusion": [{"bac": 13, "weights": {"avoid": 0.2, "wander_left": 0.5, "wander_right": 0.3}}],
             },
             {
@@ -75,6 +76,7 @@ def test_round_trip_and_schema() -> None:
         (["network", "steps", 0, "fusion", 0, "weights", "attract_red"], 0.3, "not applicable in BAC 13"),
         (["format"], "other@2", "format must be"),
         (["network", "steps", 0, "speed"], 1, "unknown field 'speed'"),
+        (["network", "steps", 0, "default_weights", "avoid"], -1.0, "negative weight"),
     ],
 )
 def test_invalid_tables_are_rejected(path: list[object], value: object, message: str) -> None:

@@ -148,7 +148,7 @@ def estimate_run(
         s.goal[len("attract_") :] if s.goal and s.goal.startswith("attract_") else None for s in run.segments
     ]
     steps = tuple(
-        Step(nm, goal, tuple(rows[s.index]))
+        Step(nm, goal, tuple(rows[s.index]), None, step_default_weights(run, opts, s.index))
         for nm, goal, s in zip(step_names(goals), goals, run.segments, strict=True)
     )
     est = {
@@ -165,7 +165,9 @@ def estimate_run(
     return table, len(groups), skipped
 
 
-def default_weights_of(run: SegmentedRun, opts: EstimateOptions) -> dict[str, float]:
+def default_weights_of(
+    run: SegmentedRun, opts: EstimateOptions, *, within: np.ndarray | None = None, salt: int = 1 << 20
+) -> dict[str, float]:
     """Weights for BACs never seen in training: the teacher's overall style.
 
     The goal-free behaviours (all but ``attract_*``) are fitted over every informative step of
@@ -173,11 +175,14 @@ def default_weights_of(run: SegmentedRun, opts: EstimateOptions) -> dict[str, fl
     than by a fixed fallback; when that fit is empty, safe wandering (avoid + wander).
     """
     idx = [i for i, n in enumerate(run.names) if not n.startswith("attract_")]
-    steps = np.nonzero(run.informative & run.applicable[:, idx].any(axis=1))[0]
+    mask = run.informative & run.applicable[:, idx].any(axis=1)
+    if within is not None:
+        mask &= within
+    steps = np.nonzero(mask)[0]
     fallback = default_weights_for(run.names)
     if len(idx) == 0 or len(steps) < opts.min_samples:
         return fallback
-    rng = np.random.default_rng([opts.seed, 1 << 20])
+    rng = np.random.default_rng([opts.seed, salt])
     w, _ = estimate_group(
         run.vectors[steps][:, idx, :], run.demo[steps], opts=replace(opts, trials=1), rng=rng
     )
@@ -197,3 +202,12 @@ def estimate_file(
     table, n, skipped = estimate_run(run, opts=opts, name=Path(src).name, progress=progress)
     write_table(table, out)
     return EstimateResult(table, str(out), n, skipped)
+
+
+def step_default_weights(run: SegmentedRun, opts: EstimateOptions, segment: int) -> dict[str, float] | None:
+    """The manner of one step for its unseen BACs: its goal-free behaviours fitted over all of
+    its informative steps (None when it has too few)."""
+    within = run.segment_of == segment
+    if int((within & run.informative).sum()) < opts.min_samples:
+        return None
+    return default_weights_of(run, opts, within=within, salt=(1 << 20) + 1 + segment)
