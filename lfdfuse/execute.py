@@ -327,6 +327,7 @@ def drive_table(
                 "left_range_mean_m": round(float(arr[:, 0].mean()), 3),
                 "right_range_mean_m": round(float(arr[:, 1].mean()), 3),
                 "ticks": len(pairs),
+                "style": corridor_style(arr[:, 0], arr[:, 1]),
             }
         )
     active_ticks = sum(len(p) for p in driver.side.values())
@@ -349,13 +350,22 @@ def write_report(report: dict[str, Any], path: str | Path) -> None:
     write_text_atomic(path, json.dumps(report, indent=1) + "\n")
 
 
-def style_of(left_m: float, right_m: float) -> str:
-    """The paper's style measure (Fig. 10) in words: which wall the robot keeps closer to."""
-    if left_m < 0.8 * right_m:
-        return "keeps left"
-    if right_m < 0.8 * left_m:
-        return "keeps right"
-    return "keeps to the centre"
+def corridor_style(left_m: np.ndarray, right_m: np.ndarray, *, sight_m: float = 2.0) -> str:
+    """The paper's style measure (Fig. 10) in words, from the ±90° ranges of each tick.
+
+    Only ticks with both walls in sight count (corridor stretches): a mean over openings, doors and
+    crossings says more about the building than about the robot. ``left``, ``right`` or
+    ``centre`` (median offset under 0.25 m); ``unknown`` without such ticks.
+    """
+    both = (left_m < sight_m) & (right_m < sight_m)
+    if not both.any():
+        return "unknown"
+    offset = float(np.median(right_m[both] - left_m[both])) / 2  # > 0: the robot is left of centre
+    if offset > 0.25:
+        return "left"
+    if offset < -0.25:
+        return "right"
+    return "centre"
 
 
 def verdict(report: dict[str, Any]) -> str:
@@ -366,9 +376,7 @@ def verdict(report: dict[str, Any]) -> str:
         parts.append(
             f"task {'completed' if report['completed'] else 'NOT completed'} ({done}/{len(report['goals'])} goals)"
         )
-    styles = [
-        f"{s['name']} {style_of(s['left_range_mean_m'], s['right_range_mean_m'])}" for s in report["steps"]
-    ]
+    styles = [f"{s['name']} keeps {s.get('style', 'unknown')}" for s in report["steps"]]
     parts.append("; ".join(styles) if styles else "no step ran")
     parts.append(f"{report['collisions']} collisions")
     return ", ".join(parts)

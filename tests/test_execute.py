@@ -222,3 +222,14 @@ def test_execute_bad_input(three_goal_table: FusionTable, tmp_path: Path) -> Non
             out=tmp_path / "x.mcap",
             command="execute",
         )
+
+
+def test_corridor_style_ignores_openings() -> None:
+    from lfdfuse.execute import corridor_style
+
+    left = np.array([0.6, 0.6, 8.0, 8.0, 8.0, 0.7])  # doors on the left inflate a mean
+    right = np.array([1.8, 1.8, 1.7, 1.8, 1.8, 1.7])
+    assert corridor_style(left, right) == "left"
+    assert corridor_style(right, left) == "right"
+    assert corridor_style(np.full(4, 1.2), np.full(4, 1.25)) == "centre"
+    assert corridor_style(np.full(3, 8.0), np.full(3, 1.0)) == "unknown"
