@@ -19,6 +19,7 @@ from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
 from lfdfuse.execute import ExecuteOptions, drive_table
 from lfdfuse.log.reader import iter_messages
 from lfdfuse.network import NetworkRuntime
+from lfdfuse.robot import Pose
 from lfdfuse.segment import read_segmented, segment_file
 from lfdfuse.table import FusionRow, FusionTable, Network, Step, dump_table
 from lfdfuse.world import load_world
@@ -233,3 +234,37 @@ def test_corridor_style_ignores_openings() -> None:
     assert corridor_style(right, left) == "right"
     assert corridor_style(np.full(4, 1.2), np.full(4, 1.25)) == "centre"
     assert corridor_style(np.full(3, 8.0), np.full(3, 1.0)) == "unknown"
+
+
+class _Straight:
+    """A driver that only drives straight on (into the wall ahead)."""
+
+    done = False
+
+    def command(self, pose: object, reading: object) -> tuple[float, float]:
+        return 0.4, 0.0
+
+
+@pytest.mark.parametrize("stop", [False, True])
+def test_collisions_are_counted_and_can_end_the_run(tmp_path: Path, stop: bool) -> None:
+    from lfdfuse.robot import RobotParams
+    from lfdfuse.sensors import SensorParams, Sensors
+    from lfdfuse.simulate import run_loop
+
+    world = load_world("corridor")
+    summary = run_loop(
+        world=world,
+        driver=_Straight(),
+        start=Pose(28.0, 1.2, 0.0),  # 2 m before the end wall
+        duration_s=20.0,
+        out=tmp_path / "c.mcap",
+        metadata={},
+        rng=np.random.default_rng(0),
+        sensors=Sensors(world, SensorParams()),
+        robot=RobotParams(),
+        reached=list,
+        stop_on_collision=stop,
+    )
+    assert summary.collisions == 1  # pressing on against the wall is one collision, not many
+    assert summary.poses[:, 0].max() <= 30.0 - 0.25 + 1e-9
+    assert (summary.duration_s < 6.0) if stop else (summary.duration_s == 20.0)
