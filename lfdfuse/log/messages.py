@@ -16,6 +16,24 @@ import numpy as np
 from lfdfuse.sensors import Detection, ScanGeometry
 from lfdfuse.world import World
 
+#: name of the MCAP metadata record that holds provenance
+PROVENANCE = "lfdfuse"
+
+
+@dataclass(frozen=True)
+class RawMessage:
+    """A message with its channel and schema exactly as stored (for copying through)."""
+
+    topic: str
+    schema_name: str
+    schema_encoding: str
+    schema_data: bytes
+    message_encoding: str
+    log_time_ns: int
+    publish_time_ns: int
+    data: bytes
+
+
 #: topic → schema name (a contract)
 TOPICS: dict[str, str] = {
     "/scan": "foxglove.LaserScan",

@@ -14,8 +14,7 @@ from mcap.exceptions import McapError
 from mcap.reader import make_reader
 
 from lfdfuse.errors import LogError
-from lfdfuse.log.messages import from_stamp, yaw_of
-from lfdfuse.log.writer import PROVENANCE
+from lfdfuse.log.messages import PROVENANCE, RawMessage, from_stamp, yaw_of
 from lfdfuse.sensors import Detection, ScanGeometry
 
 
@@ -41,20 +40,6 @@ def iter_messages(
                 yield channel.topic, (schema.name if schema else ""), message.log_time, message.data
         except (McapError, ValueError, EOFError, OSError, KeyError, AssertionError) as exc:
             raise LogError(f"{path}: not a readable MCAP file ({exc.__class__.__name__}: {exc})") from exc
-
-
-@dataclass(frozen=True)
-class RawMessage:
-    """A message with its channel and schema exactly as stored (for copying through)."""
-
-    topic: str
-    schema_name: str
-    schema_encoding: str
-    schema_data: bytes
-    message_encoding: str
-    log_time_ns: int
-    publish_time_ns: int
-    data: bytes
 
 
 def iter_raw(path: str | Path, *, exclude_prefix: str | None = None) -> Iterator[RawMessage]:

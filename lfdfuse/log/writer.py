@@ -6,7 +6,7 @@ import os
 import tempfile
 from pathlib import Path
 from types import TracebackType
-from typing import TYPE_CHECKING, Any, BinaryIO
+from typing import Any, BinaryIO
 
 import orjson
 from mcap.writer import CompressionType, Writer
@@ -14,13 +14,10 @@ from mcap.writer import CompressionType, Writer
 from lfdfuse import __version__
 from lfdfuse.atomic import umask
 from lfdfuse.errors import LogError
-from lfdfuse.log.messages import TOPICS
-
-if TYPE_CHECKING:
-    from lfdfuse.log.reader import RawMessage
+from lfdfuse.log.messages import PROVENANCE, TOPICS, RawMessage
 from lfdfuse.log.schemas import schema_text
 
-PROVENANCE = "lfdfuse"
+__all__ = ["PROVENANCE", "LogWriter"]
 
 
 class LogWriter:
