@@ -16,6 +16,7 @@ import yaml
 from lfdfuse.atomic import write_text_atomic
 from lfdfuse.behaviors import ATTRACT, BASE_BEHAVIORS
 from lfdfuse.errors import ConfigError
+from lfdfuse.yamlfile import read_yaml
 
 FORMAT = "lfdfuse/fusion-table@1"
 
@@ -219,16 +220,7 @@ def parse_table(data: Any) -> FusionTable:
 
 
 def load_table(path: str | Path) -> FusionTable:
-    p = Path(path)
-    try:
-        text = p.read_text()
-    except OSError as exc:
-        raise ConfigError(f"cannot read fusion table {p}: {exc.strerror}") from exc
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{p}: malformed YAML") from exc
-    return parse_table(data)
+    return parse_table(read_yaml(path, what="fusion table"))
 
 
 # ---------------------------------------------------------------------------- writing

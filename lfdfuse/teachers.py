@@ -12,11 +12,9 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from lfdfuse.drive import DriveParams, heading_to_command
 from lfdfuse.errors import ConfigError
@@ -25,6 +23,7 @@ from lfdfuse.robot import Pose, wrap_angle
 from lfdfuse.safety import SafetyParams, free_heading
 from lfdfuse.sensors import CameraParams, Reading, ScanGeometry, target_reached
 from lfdfuse.world import World
+from lfdfuse.yamlfile import read_yaml
 
 STYLES = ("keep-left", "keep-center", "keep-right", "slalom", "pass-left", "pass-right")
 
@@ -86,15 +85,7 @@ def parse_task(data: Any, *, origin: str) -> list[Leg]:
 
 
 def load_task(path: str) -> list[Leg]:
-    try:
-        text = Path(path).read_text()
-    except OSError as exc:
-        raise ConfigError(f"cannot read task file {path}: {exc.strerror}") from exc
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path}: malformed YAML") from exc
-    return parse_task(data, origin=path)
+    return parse_task(read_yaml(path, what="task file"), origin=path)
 
 
 def side_range(
