@@ -112,3 +112,37 @@ def test_the_installed_command_runs(tmp_path: Path) -> None:
     assert bad.returncode == 1 and bad.stderr.startswith("error: unknown world 'nowhere'")
     usage = subprocess.run([exe, "simulate", "--duration", "abc"], capture_output=True, text=True)
     assert usage.returncode == 2
+
+
+def test_the_installed_command_runs_the_whole_pipeline(tmp_path: Path) -> None:
+    exe = shutil.which("lfdfuse", path=str(Path(sys.executable).parent)) or shutil.which("lfdfuse")
+    assert exe
+    steps = [
+        ["simulate", "--world", "corridor", "--teacher", "keep-right", "--duration", "60", "-o", "d.mcap"],
+        [
+            "segment",
+            "d.mcap",
+            "--behaviors",
+            "avoid,wander_left,wander_right,wall_attract_left,wall_attract_right",
+        ],
+        ["estimate", "d.seg.mcap", "-o", "f.yaml", "--particles", "300"],
+        [
+            "execute",
+            "f.yaml",
+            "--world",
+            "corridor",
+            "--max-time",
+            "40",
+            "-o",
+            "r.mcap",
+            "--report",
+            "r.json",
+        ],
+    ]
+    for args in steps:
+        res = subprocess.run([exe, *args], capture_output=True, text=True, cwd=tmp_path)
+        assert res.returncode == 0, (args, res.stderr)
+    import json
+
+    rep = json.loads((tmp_path / "r.json").read_text())
+    assert rep["steps"][0]["style"] == "right" and rep["collisions"] == 0

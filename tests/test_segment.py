@@ -174,3 +174,26 @@ def test_default_output_name(tmp_path: Path, sample_dir: Path) -> None:
     assert res.exit_code == 0, res.output
     assert (tmp_path / "demo.seg.mcap").exists()
     assert src.read_bytes() == before  # the input is never touched
+
+
+def test_messy_scans_are_read_and_segmented(tmp_path: Path) -> None:
+    """null (NaN/inf in JSON), zero and max-range sentinels, commands out of time order."""
+    import orjson
+
+    with LogWriter(tmp_path / "m.mcap", metadata={}) as log:
+        for k in range(40):
+            t = k * 100_000_000
+            scan = msg.laser_scan(t, np.full(181, 8.0), GEOM)
+            scan["ranges"] = [None if i % 3 == 0 else (0.0 if i % 3 == 1 else 1.5) for i in range(181)]
+            log.write_raw("/scan", t, orjson.dumps(scan))
+        for k in reversed(range(40)):  # commands written newest first
+            t = k * 100_000_000 + 50_000_000
+            log.write("/cmd_vel", t, msg.twist(t, 0.3, 0.2 if k < 20 else -0.2))
+    res = segment_file(tmp_path / "m.mcap", out=tmp_path / "s.mcap", behaviors="avoid,wander,wall_attract")
+    run = read_segmented(tmp_path / "s.mcap")
+    assert np.isfinite(run.vectors).all()
+    assert run.applicable[:, 0].all()  # the 1.5 m returns
+    # commands held to each scan in time order, whatever order they were logged in
+    heading = np.arctan2(run.demo[:, 1], run.demo[:, 0])
+    assert (heading[1:20] > 0).all() and (heading[21:] < 0).all()
+    assert not res.informative[0]  # no command yet at the first scan

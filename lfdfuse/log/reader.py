@@ -147,6 +147,14 @@ def _scan_geometry(msg: dict[str, Any], count: int, max_range: float) -> ScanGeo
     return ScanGeometry(start, inc, count, max_range)
 
 
+def _ranges_array(rows: list[list[Any]]) -> np.ndarray:
+    """Ranges ``(N, B)`` as float64; JSON ``null`` (how NaN and inf travel in JSON) becomes NaN."""
+    try:
+        return np.array(rows, dtype=np.float64)
+    except (TypeError, ValueError):
+        return np.array([[math.nan if r is None else r for r in row] for row in rows], dtype=np.float64)
+
+
 def read_run(path: str | Path) -> Run:
     """Load an lfdfuse log (simulated, executed or imported) into arrays."""
     scans: list[tuple[int, list[float]]] = []
@@ -185,19 +193,17 @@ def read_run(path: str | Path) -> Run:
     if len(counts) != 1:
         raise LogError(f"{path}: /scan messages have different beam counts {sorted(counts)}")
     t = np.array([s[0] for s in scans], dtype=np.int64)
-    ranges = np.array([s[1] for s in scans], dtype=np.float64)
-    meta: dict[str, str] = {}
-    info = file_info(path)
-    meta = info.metadata.get(PROVENANCE, {})
-    max_range = float(
-        meta.get("laser_max_range_m", np.nanmax(np.where(np.isfinite(ranges), ranges, np.nan), initial=0.0))
-    )
+    ranges = _ranges_array([s[1] for s in scans])
+    meta: dict[str, str] = file_info(path).metadata.get(PROVENANCE, {})
+    # without our metadata the max range is unknown: then no range counts as a sentinel (inf), which
+    # is harmless to the primitives, which only look at returns nearer than d_max
+    max_range = float(meta.get("laser_max_range_m", math.inf))
     geom = _scan_geometry(first_scan, ranges.shape[1], max_range)
     cmd = np.array(cmds, dtype=np.float64).reshape(-1, 3)
     run_kwargs: dict[str, Any] = {}
     if sonars and first_sonar is not None:
         st = np.array([s[0] for s in sonars], dtype=np.int64)
-        sr = np.array([s[1] for s in sonars], dtype=np.float64)
+        sr = _ranges_array([s[1] for s in sonars])
         run_kwargs["sonar_m"] = sr[hold(st, t)]
         run_kwargs["sonar_geometry"] = _scan_geometry(
             first_sonar, sr.shape[1], float(meta.get("sonar_max_range_m", math.inf))
