@@ -29,7 +29,7 @@ from lfdfuse.network import Decision, NetworkRuntime, step_name_of
 from lfdfuse.robot import Pose, RobotParams
 from lfdfuse.safety import SafetyParams, free_heading
 from lfdfuse.segment import LFD_TOPICS
-from lfdfuse.sensors import Reading, SensorParams, Sensors
+from lfdfuse.sensors import Reading, SensorParams, Sensors, target_reached
 from lfdfuse.simulate import RunSummary, provenance, run_loop, side_beam_index
 from lfdfuse.table import FusionTable
 from lfdfuse.world import World
@@ -120,7 +120,7 @@ class NetworkDriver:
             sonar_max_m=self.sensors.sonar.max_range_m,
         )
         outputs = compute(obs, self.table.behaviors, self.params)
-        reached = {d.name for d in reading.detections if d.range_m <= self.params.reach_m}
+        reached = {d.name for d in reading.detections if target_reached(d.range_m, self.sensors.camera)}
         dec = self.runtime.decide(outputs, reached)
         for goal in dec.achieved_now:
             self.reached.append((goal, self.ticks))

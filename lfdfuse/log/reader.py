@@ -237,15 +237,10 @@ def read_run(path: str | Path) -> Run:
     )
 
 
-def decode(data: bytes) -> Any:
-    return orjson.loads(data)
-
-
 __all__ = [
     "FileInfo",
     "RawMessage",
     "Run",
-    "decode",
     "file_info",
     "from_stamp",
     "hold",
