@@ -37,10 +37,10 @@ lint: install
 	$(VENV)/bin/mypy
 
 bench: install
-	$(PY) -m lfdfuse.bench --out build/bench.json
+	$(PY) -m lfdfuse.tools.bench --out build/bench.json
 
 sample-logs: install
-	$(PY) -m lfdfuse.samples sample_logs
+	$(PY) -m lfdfuse.tools.samples sample_logs
 
 clean:
 	rm -rf build

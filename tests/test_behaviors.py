@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse.behaviors import (
+from lfdfuse.behaviors.primitives import (
     BASE_BEHAVIORS,
     PRESETS,
     BehaviorParams,
@@ -18,7 +18,7 @@ from lfdfuse.behaviors import (
     resolve_behaviors,
 )
 from lfdfuse.errors import ConfigError
-from lfdfuse.sensors import Detection, ScanGeometry
+from lfdfuse.sim.sensors import Detection, ScanGeometry
 
 ALL = [*BASE_BEHAVIORS, "attract_red"]
 SONAR = ScanGeometry(math.pi / 2, math.pi / 7, 8, 5.0)

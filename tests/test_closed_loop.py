@@ -15,15 +15,15 @@ import orjson
 import pytest
 
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
-from lfdfuse.execute import ExecuteOptions, drive_table
+from lfdfuse.evaluate.roundtrip import heading_errors, weight_errors
+from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.log.reader import iter_messages
-from lfdfuse.robot import Pose
-from lfdfuse.roundtrip import heading_errors, weight_errors
-from lfdfuse.segment import read_segmented, segment_file
-from lfdfuse.simulate import SimulateOptions, simulate
-from lfdfuse.table import FusionTable
-from lfdfuse.teachers import Leg
-from lfdfuse.world import load_world
+from lfdfuse.network.table import FusionTable
+from lfdfuse.segment.pipeline import read_segmented, segment_file
+from lfdfuse.sim.robot import Pose
+from lfdfuse.sources.simulate import SimulateOptions, simulate
+from lfdfuse.sources.teachers import Leg
+from lfdfuse.world.model import load_world
 from tests.conftest import ROOT
 
 

@@ -12,17 +12,17 @@ import orjson
 import pytest
 from typer.testing import CliRunner
 
-from lfdfuse.behaviors import BehaviorOutputs
+from lfdfuse.behaviors.primitives import BehaviorOutputs
 from lfdfuse.cli.main import app
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
-from lfdfuse.execute import ExecuteOptions, drive_table
+from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.log.reader import iter_messages
-from lfdfuse.network import NetworkRuntime
-from lfdfuse.robot import Pose
-from lfdfuse.segment import read_segmented, segment_file
-from lfdfuse.table import FusionRow, FusionTable, Network, Step, dump_table
-from lfdfuse.world import load_world
+from lfdfuse.network.runtime import NetworkRuntime
+from lfdfuse.network.table import FusionRow, FusionTable, Network, Step, dump_table
+from lfdfuse.segment.pipeline import read_segmented, segment_file
+from lfdfuse.sim.robot import Pose
+from lfdfuse.world.model import load_world
 from tests.conftest import ROOT, mcap_check
 
 runner = CliRunner()
@@ -226,7 +226,7 @@ def test_execute_bad_input(three_goal_table: FusionTable, tmp_path: Path) -> Non
 
 
 def test_corridor_style_ignores_openings() -> None:
-    from lfdfuse.execute import corridor_style
+    from lfdfuse.execute.run import corridor_style
 
     left = np.array([0.6, 0.6, 8.0, 8.0, 8.0, 0.7])  # doors on the left inflate a mean
     right = np.array([1.8, 1.8, 1.7, 1.8, 1.8, 1.7])
@@ -247,9 +247,9 @@ class _Straight:
 
 @pytest.mark.parametrize("stop", [False, True])
 def test_collisions_are_counted_and_can_end_the_run(tmp_path: Path, stop: bool) -> None:
-    from lfdfuse.robot import RobotParams
-    from lfdfuse.sensors import SensorParams, Sensors
-    from lfdfuse.simulate import run_loop
+    from lfdfuse.sim.robot import RobotParams
+    from lfdfuse.sim.sensors import SensorParams, Sensors
+    from lfdfuse.sources.simulate import run_loop
 
     world = load_world("corridor")
     summary = run_loop(

@@ -13,9 +13,9 @@ import pytest
 from lfdfuse.log import read_run
 from lfdfuse.log.reader import file_info, iter_messages
 from lfdfuse.log.schemas import schema
-from lfdfuse.simulate import SimulateOptions, simulate
-from lfdfuse.teachers import Leg
-from lfdfuse.world import load_world
+from lfdfuse.sources.simulate import SimulateOptions, simulate
+from lfdfuse.sources.teachers import Leg
+from lfdfuse.world.model import load_world
 from tests.conftest import ROOT, SHARED, mcap_check
 
 
@@ -100,7 +100,7 @@ def test_independent_reader_accepts_our_files(demo: tuple[Path, object]) -> None
 
 
 def test_sample_logs_are_what_the_code_generates(tmp_path: Path) -> None:
-    from lfdfuse.samples import generate
+    from lfdfuse.tools.samples import generate
 
     for made in generate(tmp_path):
         shipped = ROOT / "sample_logs" / made.name

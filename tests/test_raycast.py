@@ -9,9 +9,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.geometry import LineString, Point
 
-from lfdfuse import raycast
-from lfdfuse.raycast import RayCaster
-from lfdfuse.world import load_world
+from lfdfuse.world import raycast
+from lfdfuse.world.model import load_world
+from lfdfuse.world.raycast import RayCaster
 
 
 def test_doctests() -> None:

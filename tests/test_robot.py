@@ -2,10 +2,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from lfdfuse.raycast import RayCaster
-from lfdfuse.robot import Pose, RobotParams, move
-from lfdfuse.sensors import SensorParams, Sensors
-from lfdfuse.world import load_world
+from lfdfuse.sim.robot import Pose, RobotParams, move
+from lfdfuse.sim.sensors import SensorParams, Sensors
+from lfdfuse.world.model import load_world
+from lfdfuse.world.raycast import RayCaster
 
 
 def test_random_driving_never_passes_through_walls() -> None:

@@ -9,13 +9,13 @@ from pathlib import Path
 import numpy as np
 from typer.testing import CliRunner
 
-from lfdfuse.behaviors import BehaviorOutputs
+from lfdfuse.behaviors.primitives import BehaviorOutputs
 from lfdfuse.cli.main import app
 from lfdfuse.log import LogWriter
 from lfdfuse.log import messages as msg
 from lfdfuse.log.reader import iter_messages
-from lfdfuse.segment import read_segmented, segment_file, segment_goals, segment_outputs
-from lfdfuse.sensors import Detection, ScanGeometry
+from lfdfuse.segment.pipeline import read_segmented, segment_file, segment_goals, segment_outputs
+from lfdfuse.sim.sensors import Detection, ScanGeometry
 from tests.conftest import mcap_check
 
 GEOM = ScanGeometry(-math.pi / 2, math.pi / 180, 181, 8.0)

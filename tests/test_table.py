@@ -15,8 +15,8 @@ from typer.testing import CliRunner
 from lfdfuse.cli.main import app
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_file, estimate_run
-from lfdfuse.segment import read_segmented, segment_file
-from lfdfuse.table import dump_table, load_table, parse_table
+from lfdfuse.network.table import dump_table, load_table, parse_table
+from lfdfuse.segment.pipeline import read_segmented, segment_file
 from tests.conftest import ROOT
 
 runner = CliRunner()

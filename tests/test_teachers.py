@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.simulate import RunSummary, SimulateOptions, simulate
-from lfdfuse.teachers import STYLES, Leg, parse_task
-from lfdfuse.world import load_world
+from lfdfuse.sources.simulate import RunSummary, SimulateOptions, simulate
+from lfdfuse.sources.teachers import STYLES, Leg, parse_task
+from lfdfuse.world.model import load_world
 
 
 def _run(tmp_path: Path, world: str, legs: list[Leg], seed: int, duration: float = 300.0) -> RunSummary:

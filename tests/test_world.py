@@ -5,16 +5,16 @@ from pathlib import Path
 import pytest
 
 from lfdfuse.errors import WorldError
-from lfdfuse.world import builtin_names, load_world
-from lfdfuse.worlds import build
+from lfdfuse.world import build
+from lfdfuse.world.model import builtin_names, load_world
 
 
 def test_builtin_worlds_are_the_generated_ones() -> None:
     assert builtin_names() == sorted(build.WORLDS)
-    folder = Path(build.__file__).parent
+    folder = Path(build.__file__).parent / "builtin"
     for name in build.WORLDS:
         assert (folder / f"{name}.yaml").read_text() == build.render(name), (
-            f"run python -m lfdfuse.worlds.build ({name})"
+            f"run python -m lfdfuse.world.build ({name})"
         )
 
 

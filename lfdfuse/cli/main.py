@@ -12,19 +12,19 @@ import typer
 import yaml
 from rich.table import Table
 
-from lfdfuse.behaviors import DEFAULT_PRESET, PRESETS
+from lfdfuse.behaviors.primitives import DEFAULT_PRESET, PRESETS
 from lfdfuse.cli.common import console, progress_bar, user_errors
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pf import PFParams
 from lfdfuse.estimate.pipeline import METHODS, EstimateOptions, estimate_file
-from lfdfuse.execute import ExecuteOptions, drive_table, verdict, write_report
+from lfdfuse.execute.run import ExecuteOptions, drive_table, verdict, write_report
 from lfdfuse.log.reader import file_info
-from lfdfuse.robot import Pose
-from lfdfuse.segment import Segmentation, bac_summary, read_segmented, segment_file, segmentation_of
-from lfdfuse.simulate import RunSummary, SimulateOptions, simulate
-from lfdfuse.table import FusionTable, Network, load_table
-from lfdfuse.teachers import STYLES, Leg, TeacherParams, load_task, parse_style
-from lfdfuse.world import DEFAULT_WORLD, load_world, world_descriptions
+from lfdfuse.network.table import FusionTable, Network, load_table
+from lfdfuse.segment.pipeline import Segmentation, bac_summary, read_segmented, segment_file, segmentation_of
+from lfdfuse.sim.robot import Pose
+from lfdfuse.sources.simulate import RunSummary, SimulateOptions, simulate
+from lfdfuse.sources.teachers import STYLES, Leg, TeacherParams, load_task, parse_style
+from lfdfuse.world.model import DEFAULT_WORLD, load_world, world_descriptions
 
 app = typer.Typer(
     name="lfdfuse",

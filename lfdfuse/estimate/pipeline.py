@@ -19,8 +19,8 @@ import numpy as np
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.baselines import angle_errors, arbitration_weights, nnls_weights
 from lfdfuse.estimate.pf import PFParams, normalise, run_filter
-from lfdfuse.segment import SegmentedRun, read_segmented
-from lfdfuse.table import FusionRow, FusionTable, Network, Step, default_weights_for, write_table
+from lfdfuse.network.table import FusionRow, FusionTable, Network, Step, default_weights_for, write_table
+from lfdfuse.segment.pipeline import SegmentedRun, read_segmented
 
 Method = Literal["pf", "nnls", "arbitration"]
 METHODS: tuple[str, ...] = ("pf", "nnls", "arbitration")

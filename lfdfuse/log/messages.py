@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from lfdfuse.sensors import Detection, ScanGeometry
-from lfdfuse.world import World
+from lfdfuse.sim.sensors import Detection, ScanGeometry
+from lfdfuse.world.model import World
 
 #: name of the MCAP metadata record that holds provenance
 PROVENANCE = "lfdfuse"

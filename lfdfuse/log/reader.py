@@ -15,7 +15,7 @@ from mcap.reader import make_reader
 
 from lfdfuse.errors import LogError
 from lfdfuse.log.messages import PROVENANCE, RawMessage, from_stamp, yaw_of
-from lfdfuse.sensors import Detection, ScanGeometry
+from lfdfuse.sim.sensors import Detection, ScanGeometry
 
 
 def _open(path: str | Path) -> Any:

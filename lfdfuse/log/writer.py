@@ -12,8 +12,8 @@ import orjson
 from mcap.writer import CompressionType, Writer
 
 from lfdfuse import __version__
-from lfdfuse.atomic import umask
 from lfdfuse.errors import LogError
+from lfdfuse.files import umask
 from lfdfuse.log.messages import PROVENANCE, TOPICS, RawMessage
 from lfdfuse.log.schemas import schema_text
 

@@ -7,9 +7,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lfdfuse.raycast import RayCaster
-from lfdfuse.robot import Pose
-from lfdfuse.world import World
+from lfdfuse.sim.robot import Pose
+from lfdfuse.world.model import World
+from lfdfuse.world.raycast import RayCaster
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ import orjson
 import yaml
 
 from lfdfuse import __version__
-from lfdfuse.behaviors import (
+from lfdfuse.behaviors.primitives import (
     ATTRACT,
     DEFAULT_PRESET,
     BehaviorOutputs,
@@ -28,7 +28,7 @@ from lfdfuse.behaviors import (
     compute,
     resolve_behaviors,
 )
-from lfdfuse.drive import DriveParams, command_to_vector
+from lfdfuse.control.drive import DriveParams, command_to_vector
 from lfdfuse.errors import LogError
 from lfdfuse.log import LogWriter
 from lfdfuse.log.messages import stamp

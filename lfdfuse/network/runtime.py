@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lfdfuse.behaviors import BehaviorOutputs
-from lfdfuse.table import FusionTable, Network, Step
+from lfdfuse.behaviors.primitives import BehaviorOutputs
+from lfdfuse.network.table import FusionTable, Network, Step
 
 Path = tuple[int, ...]
 

@@ -22,11 +22,11 @@ import shapely
 from shapely.geometry import LineString, Point
 
 from lfdfuse.log import messages as msg
-from lfdfuse.raycast import RayCaster
-from lfdfuse.sensors import LaserParams
-from lfdfuse.simulate import SimulateOptions, simulate
-from lfdfuse.teachers import Leg
-from lfdfuse.world import load_world
+from lfdfuse.sim.sensors import LaserParams
+from lfdfuse.sources.simulate import SimulateOptions, simulate
+from lfdfuse.sources.teachers import Leg
+from lfdfuse.world.model import load_world
+from lfdfuse.world.raycast import RayCaster
 
 
 @dataclass(frozen=True)
@@ -166,9 +166,9 @@ def _demo(folder: Path, seconds: float) -> Path:
 
 
 def bench_behaviors(rows: list[Row], folder: Path) -> None:
-    from lfdfuse.behaviors import compute, resolve_behaviors
+    from lfdfuse.behaviors.primitives import compute, resolve_behaviors
     from lfdfuse.log.reader import read_run
-    from lfdfuse.segment import observations_of
+    from lfdfuse.segment.pipeline import observations_of
 
     run = read_run(_demo(folder, 600.0))
     obs = observations_of(run)
@@ -207,7 +207,7 @@ def bench_behaviors(rows: list[Row], folder: Path) -> None:
 
 
 def bench_segment(rows: list[Row], folder: Path) -> None:
-    from lfdfuse.segment import segment_file
+    from lfdfuse.segment.pipeline import segment_file
 
     src = _demo(folder, 600.0)
     t0 = time.perf_counter()
@@ -260,7 +260,7 @@ def bench_pf(rows: list[Row], folder: Path) -> None:
 
 def bench_estimate(rows: list[Row], folder: Path) -> None:
     from lfdfuse.estimate.pipeline import EstimateOptions, estimate_file
-    from lfdfuse.segment import segment_file
+    from lfdfuse.segment.pipeline import segment_file
 
     seg = folder / "demo600.seg.mcap"
     if not seg.exists():
@@ -281,9 +281,9 @@ def bench_estimate(rows: list[Row], folder: Path) -> None:
 
 def bench_execute(rows: list[Row], folder: Path) -> None:
     from lfdfuse.estimate.pipeline import EstimateOptions, estimate_file
-    from lfdfuse.execute import ExecuteOptions, drive_table
-    from lfdfuse.segment import segment_file
-    from lfdfuse.table import load_table
+    from lfdfuse.execute.run import ExecuteOptions, drive_table
+    from lfdfuse.network.table import load_table
+    from lfdfuse.segment.pipeline import segment_file
 
     world = load_world("building")
     legs = [Leg("red", "keep-left"), Leg("green", "keep-center"), Leg("blue", "keep-right")]
@@ -377,10 +377,10 @@ def bench_quality(rows: list[Row], folder: Path) -> None:
 def _round_trip(rows: list[Row], folder: Path) -> None:
     from lfdfuse.estimate.pf import PFParams
     from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
-    from lfdfuse.execute import ExecuteOptions, drive_table
-    from lfdfuse.roundtrip import heading_errors, weight_errors
-    from lfdfuse.samples import THREE_GOALS
-    from lfdfuse.segment import read_segmented, segment_file
+    from lfdfuse.evaluate.roundtrip import heading_errors, weight_errors
+    from lfdfuse.execute.run import ExecuteOptions, drive_table
+    from lfdfuse.segment.pipeline import read_segmented, segment_file
+    from lfdfuse.tools.samples import THREE_GOALS
 
     world = load_world("building")
     simulate(

@@ -228,7 +228,7 @@ def check_pose_free(
 
 
 def builtin_names() -> list[str]:
-    folder = resources.files("lfdfuse") / "worlds"
+    folder = resources.files("lfdfuse") / "world" / "builtin"
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".yaml"))
 
 
@@ -239,7 +239,7 @@ def load_world(name_or_path: str | None) -> World:
     """Load a built-in world by name, or a YAML file by path."""
     spec = name_or_path or DEFAULT_WORLD
     if spec in builtin_names():
-        text = (resources.files("lfdfuse") / "worlds" / f"{spec}.yaml").read_text()
+        text = (resources.files("lfdfuse") / "world" / "builtin" / f"{spec}.yaml").read_text()
         origin = spec
     else:
         path = Path(spec)

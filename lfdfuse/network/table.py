@@ -13,10 +13,9 @@ from typing import Any
 
 import yaml
 
-from lfdfuse.atomic import write_text_atomic
-from lfdfuse.behaviors import ATTRACT, BASE_BEHAVIORS
+from lfdfuse.behaviors.primitives import ATTRACT, BASE_BEHAVIORS
 from lfdfuse.errors import ConfigError
-from lfdfuse.yamlfile import read_yaml
+from lfdfuse.files import read_yaml, write_text_atomic
 
 FORMAT = "lfdfuse/fusion-table@1"
 

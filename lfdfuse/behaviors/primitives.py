@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.sensors import Detection, ScanGeometry
+from lfdfuse.sim.sensors import Detection, ScanGeometry
 
 BASE_BEHAVIORS = (
     "avoid",

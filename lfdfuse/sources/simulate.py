@@ -19,11 +19,11 @@ from lfdfuse import __version__
 from lfdfuse.errors import ConfigError
 from lfdfuse.log import LogWriter
 from lfdfuse.log import messages as msg
-from lfdfuse.planner import Planner
-from lfdfuse.robot import Pose, RobotParams, move
-from lfdfuse.sensors import Reading, SensorParams, Sensors
-from lfdfuse.teachers import Leg, StyleTeacher, TeacherParams
-from lfdfuse.world import World, check_pose_free
+from lfdfuse.sim.robot import Pose, RobotParams, move
+from lfdfuse.sim.sensors import Reading, SensorParams, Sensors
+from lfdfuse.sources.planner import Planner
+from lfdfuse.sources.teachers import Leg, StyleTeacher, TeacherParams
+from lfdfuse.world.model import World, check_pose_free
 
 Progress = Callable[[float, float], None]  # (done, total) in seconds of simulated time
 

@@ -1,6 +1,6 @@
 """Regenerate ``sample_logs/``: small demonstration logs made by code in this repo.
 
-``python -m lfdfuse.samples sample_logs`` (``make sample-logs``) rewrites every file; same code,
+``python -m lfdfuse.tools.samples sample_logs`` (``make sample-logs``) rewrites every file; same code,
 same bytes.
 """
 
@@ -11,9 +11,9 @@ from pathlib import Path
 
 import yaml
 
-from lfdfuse.simulate import SimulateOptions, simulate
-from lfdfuse.teachers import Leg
-from lfdfuse.world import load_world
+from lfdfuse.sources.simulate import SimulateOptions, simulate
+from lfdfuse.sources.teachers import Leg
+from lfdfuse.world.model import load_world
 
 #: The paper's first physical scenario: left to goal 1, centre to goal 2, right to goal 3.
 THREE_GOALS = [Leg("red", "keep-left"), Leg("green", "keep-center"), Leg("blue", "keep-right")]

@@ -1,7 +1,7 @@
 """Scripted teachers (DESIGN §9): find the way over the map and hold a lateral style.
 
 A style teacher is deliberately *not* built from the behaviour primitives: it plans over the
-free-space grid (:mod:`lfdfuse.planner`), follows the path's tangent, and corrects its heading
+free-space grid (:mod:`lfdfuse.sources.planner`), follows the path's tangent, and corrects its heading
 from the side laser beams to keep its style (left, centre, right, slalom) or swerves around
 obstacles on a chosen side. Imperfection is human-like and seeded: correlated heading noise and
 a reaction delay of a few control periods.
@@ -16,14 +16,14 @@ from typing import Any
 
 import numpy as np
 
-from lfdfuse.drive import DriveParams, heading_to_command
+from lfdfuse.control.drive import DriveParams, heading_to_command
+from lfdfuse.control.safety import SafetyParams, free_heading
 from lfdfuse.errors import ConfigError
-from lfdfuse.planner import Planner
-from lfdfuse.robot import Pose, wrap_angle
-from lfdfuse.safety import SafetyParams, free_heading
-from lfdfuse.sensors import CameraParams, Reading, ScanGeometry, target_reached
-from lfdfuse.world import World
-from lfdfuse.yamlfile import read_yaml
+from lfdfuse.files import read_yaml
+from lfdfuse.sim.robot import Pose, wrap_angle
+from lfdfuse.sim.sensors import CameraParams, Reading, ScanGeometry, target_reached
+from lfdfuse.sources.planner import Planner
+from lfdfuse.world.model import World
 
 STYLES = ("keep-left", "keep-center", "keep-right", "slalom", "pass-left", "pass-right")
 

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.raycast import _point_segment_distance
-from lfdfuse.world import World
+from lfdfuse.world.model import World
+from lfdfuse.world.raycast import _point_segment_distance
 
 _NEIGHBOURS = ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1))
 

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from lfdfuse.estimate.baselines import angle_errors
-from lfdfuse.segment import SegmentedRun
-from lfdfuse.table import FusionTable, Step
+from lfdfuse.network.table import FusionTable, Step
+from lfdfuse.segment.pipeline import SegmentedRun
 
 
 def leaf_steps(table: FusionTable) -> list[Step]:

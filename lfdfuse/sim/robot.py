@@ -7,8 +7,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lfdfuse.drive import DriveParams
-from lfdfuse.raycast import RayCaster
+from lfdfuse.control.drive import DriveParams
+from lfdfuse.world.raycast import RayCaster
 
 
 @dataclass(frozen=True)

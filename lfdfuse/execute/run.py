@@ -19,20 +19,20 @@ from typing import Any
 import numpy as np
 import orjson
 
-from lfdfuse.atomic import write_text_atomic
-from lfdfuse.behaviors import BehaviorParams, Observations, compute
-from lfdfuse.drive import heading_to_command
+from lfdfuse.behaviors.primitives import BehaviorParams, Observations, compute
+from lfdfuse.control.drive import heading_to_command
+from lfdfuse.control.safety import SafetyParams, free_heading
 from lfdfuse.errors import ConfigError
+from lfdfuse.files import write_text_atomic
 from lfdfuse.log import LogWriter
 from lfdfuse.log import messages as msg
-from lfdfuse.network import Decision, NetworkRuntime, step_name_of
-from lfdfuse.robot import Pose, RobotParams
-from lfdfuse.safety import SafetyParams, free_heading
-from lfdfuse.segment import LFD_TOPICS
-from lfdfuse.sensors import Reading, SensorParams, Sensors, target_reached
-from lfdfuse.simulate import RunSummary, provenance, run_loop, side_beam_index
-from lfdfuse.table import FusionTable
-from lfdfuse.world import World
+from lfdfuse.network.runtime import Decision, NetworkRuntime, step_name_of
+from lfdfuse.network.table import FusionTable
+from lfdfuse.segment.pipeline import LFD_TOPICS
+from lfdfuse.sim.robot import Pose, RobotParams
+from lfdfuse.sim.sensors import Reading, SensorParams, Sensors, target_reached
+from lfdfuse.sources.simulate import RunSummary, provenance, run_loop, side_beam_index
+from lfdfuse.world.model import World
 
 EXEC_TOPICS = {
     "/lfd/behaviors": LFD_TOPICS["/lfd/behaviors"],
