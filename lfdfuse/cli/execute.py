@@ -1,0 +1,66 @@
+"""``lfdfuse execute``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from lfdfuse.cli.app import WORLD_HELP, app
+from lfdfuse.cli.common import progress_bar, user_errors
+from lfdfuse.cli.render import print_report
+from lfdfuse.execute.run import ExecuteOptions, drive_table, write_report
+from lfdfuse.network.table import load_table
+from lfdfuse.sim.robot import Pose
+from lfdfuse.world.model import DEFAULT_WORLD, load_world
+
+
+@app.command("execute")
+@user_errors
+def execute_cmd(
+    table: Path = typer.Argument(
+        ..., help="A fusion table YAML (from `lfdfuse estimate`, or written by hand)."
+    ),
+    world: str = typer.Option(DEFAULT_WORLD, "--world", "-w", help=WORLD_HELP),
+    start: str | None = typer.Option(
+        None, "--start", help="Start pose X,Y,THETA (m, m, rad); default: the world's."
+    ),
+    max_time: float = typer.Option(300.0, "--max-time", help="Stop after this many simulated seconds."),
+    seed: int = typer.Option(0, "--seed", help="Seed of every random draw (sensor noise)."),
+    noise: float = typer.Option(
+        0.0, "--sensor-noise", help="Std (m) of Gaussian range noise on laser and sonar."
+    ),
+    stop_on_collision: bool = typer.Option(
+        False, "--stop-on-collision", help="End the run at the first collision."
+    ),
+    out: Path = typer.Option(
+        Path("run.mcap"), "--out", "-o", help="Run log (MCAP) with the /lfd/* channels and an overlay."
+    ),
+    report: Path | None = typer.Option(None, "--report", help="Write the JSON report here."),
+) -> None:
+    """Let a learned behaviour network drive the robot, log the run and report how it went.
+
+    The run stops when the last goal is achieved or at --max-time.
+
+    Examples:
+      lfdfuse execute fusion.yaml --world building -o run.mcap --report run.json
+      lfdfuse execute fusion.yaml --world tee --start 1,9,0 --max-time 120
+    """
+    w = load_world(world)
+    tab = load_table(table)
+    pose = Pose.parse(start) if start else None
+    opts = ExecuteOptions(
+        world=w,
+        table=tab,
+        table_name=table.name,
+        start=pose,
+        max_time_s=max_time,
+        seed=seed,
+        sensor_noise_m=noise,
+        stop_on_collision=stop_on_collision,
+    )
+    with progress_bar("execute") as update:
+        res = drive_table(opts, out=out, command="execute", progress=update)
+    if report is not None:
+        write_report(res.report, report)
+    print_report(res.report, out=str(out))

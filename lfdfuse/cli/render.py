@@ -1,0 +1,116 @@
+"""How results look in the terminal: runs, segments, fusion tables, execute reports."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rich.table import Table
+
+from lfdfuse.cli.common import console
+from lfdfuse.execute.run import verdict
+from lfdfuse.network.table import FusionTable, Network
+from lfdfuse.segment.pipeline import Segmentation, bac_summary
+from lfdfuse.sources.simulate import RunSummary
+
+
+def print_run(summary: RunSummary, *, title: str) -> None:
+    console.print(f"[bold]{title}[/bold] → {summary.out}")
+    console.print(f"  duration   {summary.duration_s:8.1f} s   ({summary.steps} steps)")
+    console.print(f"  distance   {summary.distance_m:8.1f} m")
+    console.print(f"  collisions {summary.collisions:8d}")
+    reached = ", ".join(f"{n} at {t:.1f} s" for n, t in summary.reached) or "none"
+    console.print(f"  targets    {reached}")
+    console.print(
+        f"  side range left {summary.left_range_mean_m:.2f} m, right {summary.right_range_mean_m:.2f} m (mean at ±90°)"
+    )
+
+
+def print_segments(segm: Segmentation, names: tuple[str, ...], dt: float) -> None:
+    for seg in segm.segments:
+        bacs = bac_summary(segm, seg)
+        goal = seg.goal or "no goal reached"
+        steps = seg.stop - seg.start
+        console.print(
+            f"  [bold]segment {seg.index}[/bold] → {goal}: {steps * dt:.1f} s, {steps} steps, {len(bacs)} BACs"
+        )
+        cells = [f"{b} ({n})" for b, n, _ in bacs]
+        console.print("    BAC (samples): " + ", ".join(cells), soft_wrap=False)
+
+
+_SHORT = {
+    "avoid": "av",
+    "wander": "w",
+    "wander_left": "wL",
+    "wander_right": "wR",
+    "wall_attract": "a",
+    "wall_attract_left": "aL",
+    "wall_attract_right": "aR",
+    "sonar_avoid": "son",
+    "wall_side_left": "sL",
+    "wall_side_right": "sR",
+    "circular_avoid_left": "cL",
+    "circular_avoid_right": "cR",
+}
+
+
+def _abbrev(name: str) -> str:
+    return _SHORT.get(name, name.replace("attract_", ""))
+
+
+def print_table(table: FusionTable) -> None:
+    """Weights (± std), samples and fit error per step and BAC, in percent to fit a terminal."""
+    legend = ", ".join(f"{_abbrev(b)}={b}" for b in table.behaviors)
+    console.print(
+        f"weights and std in % of the row; n = samples (* = too few to trust); fit° = mean heading error\n{legend}"
+    )
+
+    def walk(net: Network, depth: int) -> None:
+        for step in net.steps:
+            goal = f"goal {step.goal}" if step.goal else "no goal"
+            console.print(f"{'  ' * depth}[bold]{step.name}[/bold] ({goal})")
+            if step.network is not None:
+                walk(step.network, depth + 1)
+                continue
+            t = Table(box=None, header_style="bold", pad_edge=False, padding=(0, 1))
+            t.add_column("BAC", justify="right")
+            t.add_column("n", justify="right")
+            t.add_column("fit°", justify="right")
+            for b in table.behaviors:
+                t.add_column(_abbrev(b), justify="right")
+            for row in sorted(step.fusion, key=lambda r: -(r.samples or 0)):
+                cells = []
+                for b in table.behaviors:
+                    if b in row.weights:
+                        sd = (row.std or {}).get(b)
+                        cells.append(
+                            f"{100 * row.weights[b]:.0f}" + (f"±{100 * sd:.0f}" if sd is not None else "")
+                        )
+                    else:
+                        cells.append("")
+                n = f"{row.samples}" + ("*" if row.low_samples else "") if row.samples is not None else ""
+                fit = f"{row.fit_error_deg:.1f}" if row.fit_error_deg is not None else ""
+                t.add_row(str(row.bac), n, fit, *cells)
+            if step.fusion:
+                console.print(t)
+            else:
+                console.print("    (no informative steps: default weights)")
+
+    walk(table.network, 0)
+
+
+def print_report(rep: dict[str, Any], *, out: str) -> None:
+    status = "task completed" if rep["completed"] else "task not completed"
+    console.print(
+        f"[bold]execute[/bold] → {out}: {status} in {rep['duration_s']:.1f} s, {rep['path_length_m']:.1f} m, {rep['collisions']} collisions"
+    )
+    for g in rep["goals"]:
+        when = f"at {g['time_s']:.1f} s" if g["reached"] else "not reached"
+        console.print(f"  goal {g['name']} ({g['target']}): {when}")
+    for s in rep["steps"]:
+        console.print(
+            f"  step {s['name']}: side range left {s['left_range_mean_m']:.2f} m, right {s['right_range_mean_m']:.2f} m"
+        )
+    console.print(
+        f"  overall: left {rep['left_range_mean_m']:.2f} m, right {rep['right_range_mean_m']:.2f} m; default weights on {100 * rep['unseen_bac_fraction']:.1f}% of ticks"
+    )
+    console.print(f"  [bold]verdict[/bold]: {verdict(rep)}")
