@@ -20,8 +20,8 @@ from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.log.reader import iter_messages
 from lfdfuse.network.runtime import NetworkRuntime
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step, dump_table
-from lfdfuse.segment.pipeline import read_segmented, segment_file
-from lfdfuse.sim.robot import Pose
+from lfdfuse.segment.pipeline import segment_file
+from lfdfuse.segment.read import read_segmented
 from lfdfuse.world.model import load_world
 from tests.conftest import ROOT, mcap_check
 
@@ -226,7 +226,7 @@ def test_execute_bad_input(three_goal_table: FusionTable, tmp_path: Path) -> Non
 
 
 def test_corridor_style_ignores_openings() -> None:
-    from lfdfuse.execute.run import corridor_style
+    from lfdfuse.execute.report import corridor_style
 
     left = np.array([0.6, 0.6, 8.0, 8.0, 8.0, 0.7])  # doors on the left inflate a mean
     right = np.array([1.8, 1.8, 1.7, 1.8, 1.8, 1.7])
@@ -234,37 +234,3 @@ def test_corridor_style_ignores_openings() -> None:
     assert corridor_style(right, left) == "right"
     assert corridor_style(np.full(4, 1.2), np.full(4, 1.25)) == "centre"
     assert corridor_style(np.full(3, 8.0), np.full(3, 1.0)) == "unknown"
-
-
-class _Straight:
-    """A driver that only drives straight on (into the wall ahead)."""
-
-    done = False
-
-    def command(self, pose: object, reading: object) -> tuple[float, float]:
-        return 0.4, 0.0
-
-
-@pytest.mark.parametrize("stop", [False, True])
-def test_collisions_are_counted_and_can_end_the_run(tmp_path: Path, stop: bool) -> None:
-    from lfdfuse.sim.robot import RobotParams
-    from lfdfuse.sim.sensors import SensorParams, Sensors
-    from lfdfuse.sources.simulate import run_loop
-
-    world = load_world("corridor")
-    summary = run_loop(
-        world=world,
-        driver=_Straight(),
-        start=Pose(28.0, 1.2, 0.0),  # 2 m before the end wall
-        duration_s=20.0,
-        out=tmp_path / "c.mcap",
-        metadata={},
-        rng=np.random.default_rng(0),
-        sensors=Sensors(world, SensorParams()),
-        robot=RobotParams(),
-        reached=list,
-        stop_on_collision=stop,
-    )
-    assert summary.collisions == 1  # pressing on against the wall is one collision, not many
-    assert summary.poses[:, 0].max() <= 30.0 - 0.25 + 1e-9
-    assert (summary.duration_s < 6.0) if stop else (summary.duration_s == 20.0)

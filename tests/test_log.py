@@ -14,7 +14,7 @@ from lfdfuse.log import read_run
 from lfdfuse.log.reader import file_info, iter_messages
 from lfdfuse.log.schemas import schema
 from lfdfuse.sources.simulate import SimulateOptions, simulate
-from lfdfuse.sources.teachers import Leg
+from lfdfuse.sources.tasks import Leg
 from lfdfuse.world.model import load_world
 from tests.conftest import ROOT, SHARED, mcap_check
 

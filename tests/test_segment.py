@@ -14,7 +14,9 @@ from lfdfuse.cli.main import app
 from lfdfuse.log import LogWriter
 from lfdfuse.log import messages as msg
 from lfdfuse.log.reader import iter_messages
-from lfdfuse.segment.pipeline import read_segmented, segment_file, segment_goals, segment_outputs
+from lfdfuse.segment.goals import segment_goals, segment_outputs
+from lfdfuse.segment.pipeline import segment_file
+from lfdfuse.segment.read import read_segmented
 from lfdfuse.sim.sensors import Detection, ScanGeometry
 from tests.conftest import mcap_check
 

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.sources.simulate import RunSummary, SimulateOptions, simulate
-from lfdfuse.sources.teachers import STYLES, Leg, parse_task
+from lfdfuse.sim.loop import RunSummary
+from lfdfuse.sources.simulate import SimulateOptions, simulate
+from lfdfuse.sources.tasks import STYLES, Leg, parse_task
 from lfdfuse.world.model import load_world
 
 

@@ -9,7 +9,8 @@ import typer
 from lfdfuse.cli.app import WORLD_HELP, app
 from lfdfuse.cli.common import progress_bar, user_errors
 from lfdfuse.cli.render import print_report
-from lfdfuse.execute.run import ExecuteOptions, drive_table, write_report
+from lfdfuse.execute.report import write_report
+from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.network.table import load_table
 from lfdfuse.sim.robot import Pose
 from lfdfuse.world.model import DEFAULT_WORLD, load_world

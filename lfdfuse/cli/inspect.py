@@ -12,7 +12,7 @@ from lfdfuse.cli.app import app
 from lfdfuse.cli.common import console, user_errors
 from lfdfuse.cli.render import print_segments
 from lfdfuse.log.reader import file_info
-from lfdfuse.segment.pipeline import read_segmented, segmentation_of
+from lfdfuse.segment.read import read_segmented, segmentation_of
 
 
 @app.command()

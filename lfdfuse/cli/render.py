@@ -7,10 +7,10 @@ from typing import Any
 from rich.table import Table
 
 from lfdfuse.cli.common import console
-from lfdfuse.execute.run import verdict
+from lfdfuse.execute.report import verdict
 from lfdfuse.network.table import FusionTable, Network
-from lfdfuse.segment.pipeline import Segmentation, bac_summary
-from lfdfuse.sources.simulate import RunSummary
+from lfdfuse.segment.goals import Segmentation, bac_summary
+from lfdfuse.sim.loop import RunSummary
 
 
 def print_run(summary: RunSummary, *, title: str) -> None:

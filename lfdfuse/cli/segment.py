@@ -24,6 +24,9 @@ def segment_cmd(
         "-b",
         help=f"A preset ({', '.join(PRESETS)}) or a comma list of behaviour names.",
     ),
+    lag: float = typer.Option(
+        0.0, "--lag", help="Pair each scan with the command issued this many seconds later (reaction lag)."
+    ),
     out: Path | None = typer.Option(
         None, "--out", "-o", help="Output MCAP (default: IN with .seg before .mcap)."
     ),
@@ -36,15 +39,27 @@ def segment_cmd(
       lfdfuse segment demo.mcap
       lfdfuse segment demo.mcap --behaviors full -o demo.full.seg.mcap
       lfdfuse segment demo.mcap --behaviors avoid,attract,wander_left,wander_right
+      lfdfuse segment demo.mcap --lag 0.3
     """
     target = out or default_out(src, ".seg")
     with progress_bar("segment"):
-        res = segment_file(src, out=target, behaviors=behaviors)
+        res = segment_file(src, out=target, behaviors=behaviors, lag_s=lag)
     console.print(f"[bold]segment[/bold] {src} → {res.out}")
     console.print(f"  behaviours: {', '.join(res.names)}")
     dt = 0.1
     if len(res.t_ns) > 1:
         dt = float(np.median(np.diff(res.t_ns))) / 1e9
     still = int((~res.informative).sum())
-    console.print(f"  {len(res.t_ns)} steps, {still} without heading information (standing still)")
+    console.print(
+        f"  {len(res.t_ns)} steps, {still} without heading information (standing still or reversing)"
+    )
+    fits = [f for f in res.lag_fits if f.steps > 0]
+    if fits:
+        best = min(fits, key=lambda f: f.heading_error_deg)
+        here = next((f for f in fits if abs(f.lag_s - res.lag_s) < 1e-9), None)
+        now = f", {here.heading_error_deg:.1f}° at --lag {res.lag_s:g}" if here is not None else ""
+        console.print(
+            f"  command lag: {best.lag_s:+.1f} s explains the demo best "
+            f"(per-BAC least-squares heading error {best.heading_error_deg:.1f}°{now})"
+        )
     print_segments(res.segmentation, res.names, dt)

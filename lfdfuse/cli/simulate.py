@@ -16,7 +16,8 @@ from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.network.table import load_table
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sources.simulate import SimulateOptions, simulate
-from lfdfuse.sources.teachers import STYLES, Leg, TeacherParams, load_task, parse_style
+from lfdfuse.sources.tasks import STYLES, Leg, load_task, parse_style
+from lfdfuse.sources.teachers import TeacherParams
 from lfdfuse.world.model import DEFAULT_WORLD, load_world
 
 

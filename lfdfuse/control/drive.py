@@ -4,7 +4,7 @@ A vector ``V`` in the robot frame becomes a command by its heading ``θ = atan2(
 the turn rate is ``ω = clip(k·θ, ±ω_max)`` and the speed ``v = v_max·max(0, cos θ)`` falls
 with ``|θ|`` (zero at ±90° and beyond). The inverse recovers ``θ`` from a command: from ``ω``
 while it is below its limit, else from ``v`` (``|θ| = arccos(v / v_max)``). A command that
-neither moves nor turns carries no heading information.
+neither moves nor turns, or that reverses, carries no heading information.
 """
 
 from __future__ import annotations
@@ -48,7 +48,8 @@ def command_to_heading(v: np.ndarray, omega: np.ndarray, p: DriveParams) -> tupl
     """Inverse mapping: demonstrated headings ``θ`` (rad) and a mask of informative steps.
 
     ``v`` and ``omega`` have the same shape; the mask is False where the robot neither moves
-    nor turns (no heading information). Speeds above ``v_max`` count as ``v_max``.
+    nor turns, or reverses (``v < 0``), or the command is not finite: no heading information.
+    Speeds above ``v_max`` count as ``v_max``.
     """
     v = np.asarray(v, dtype=np.float64)
     omega = np.asarray(omega, dtype=np.float64)
@@ -59,7 +60,9 @@ def command_to_heading(v: np.ndarray, omega: np.ndarray, p: DriveParams) -> tupl
     th_sat = p.omega_max_rps / p.k_turn
     from_v = np.sign(omega) * np.maximum(np.arccos(ratio), th_sat)
     theta = np.where(by_speed, from_v, omega / p.k_turn)
-    informative = (np.abs(v) > p.v_still_mps) | (np.abs(omega) > p.omega_still_rps)
+    moving = (np.abs(v) > p.v_still_mps) | (np.abs(omega) > p.omega_still_rps)
+    # reversing carries no heading for primitives that steer a forward-moving robot (DESIGN §3)
+    informative = moving & (v >= 0.0) & np.isfinite(v) & np.isfinite(omega)
     return theta, informative
 
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from lfdfuse.estimate.baselines import angle_errors
 from lfdfuse.network.table import FusionTable, Step
-from lfdfuse.segment.pipeline import SegmentedRun
+from lfdfuse.segment.read import SegmentedRun
 
 
 def leaf_steps(table: FusionTable) -> list[Step]:

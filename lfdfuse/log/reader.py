@@ -14,7 +14,15 @@ from mcap.exceptions import McapError
 from mcap.reader import make_reader
 
 from lfdfuse.errors import LogError
-from lfdfuse.log.messages import PROVENANCE, RawMessage, from_stamp, yaw_of
+from lfdfuse.log.messages import PROVENANCE, RawMessage, from_stamp
+from lfdfuse.log.sensing import (
+    ScanMessage,
+    decode_detections,
+    decode_pose,
+    decode_scan,
+    decode_twist,
+    scan_geometry,
+)
 from lfdfuse.sim.sensors import Detection, ScanGeometry
 
 
@@ -141,50 +149,45 @@ def hold(src_t: np.ndarray, dst_t: np.ndarray) -> np.ndarray:
     return np.clip(np.searchsorted(src_t, dst_t, side="right") - 1, 0, max(len(src_t) - 1, 0))
 
 
-def _scan_geometry(msg: dict[str, Any], count: int, max_range: float) -> ScanGeometry:
-    start, end = float(msg["start_angle"]), float(msg["end_angle"])
-    inc = (end - start) / (count - 1) if count > 1 else 0.0
-    return ScanGeometry(start, inc, count, max_range)
-
-
-def _ranges_array(rows: list[list[Any]]) -> np.ndarray:
-    """Ranges ``(N, B)`` as float64; JSON ``null`` (how NaN and inf travel in JSON) becomes NaN."""
-    try:
-        return np.array(rows, dtype=np.float64)
-    except (TypeError, ValueError):
-        return np.array([[math.nan if r is None else r for r in row] for row in rows], dtype=np.float64)
+def _ranges_array(rows: list[list[float]]) -> np.ndarray:
+    return np.array(rows, dtype=np.float64)
 
 
 def read_run(path: str | Path) -> Run:
     """Load an lfdfuse log (simulated, executed or imported) into arrays."""
     scans: list[tuple[int, list[float]]] = []
     sonars: list[tuple[int, list[float]]] = []
-    poses: list[tuple[int, float, float, float]] = []
-    cmds: list[tuple[int, float, float]] = []
+    pose_t: list[int] = []
+    poses: list[tuple[float, float, float]] = []
+    cmd_t: list[int] = []
+    cmds: list[tuple[float, float]] = []
     dets: list[tuple[int, tuple[Detection, ...]]] = []
-    first_scan: dict[str, Any] | None = None
-    first_sonar: dict[str, Any] | None = None
+    first_scan: ScanMessage | None = None
+    first_sonar: ScanMessage | None = None
     topics: set[str] = set()
+    # times stay int64 nanoseconds: a float64 cannot hold an epoch stamp to the nanosecond, and
+    # pairing commands with scans by rounded times pairs the wrong ones
     for topic, _schema, t_ns, data in iter_messages(
         path, topics=["/scan", "/sonar", "/pose", "/cmd_vel", "/targets"]
     ):
         topics.add(topic)
         msg = orjson.loads(data)
         if topic == "/scan":
-            first_scan = first_scan or msg
-            scans.append((t_ns, msg["ranges"]))
+            scan = decode_scan(msg)
+            first_scan = first_scan or scan
+            scans.append((t_ns, scan.ranges_m))
         elif topic == "/sonar":
-            first_sonar = first_sonar or msg
-            sonars.append((t_ns, msg["ranges"]))
+            sonar = decode_scan(msg)
+            first_sonar = first_sonar or sonar
+            sonars.append((t_ns, sonar.ranges_m))
         elif topic == "/pose":
-            p = msg["pose"]
-            poses.append((t_ns, p["position"]["x"], p["position"]["y"], yaw_of(p["orientation"])))
+            pose_t.append(t_ns)
+            poses.append(decode_pose(msg))
         elif topic == "/cmd_vel":
-            cmds.append((t_ns, float(msg["linear"]["x"]), float(msg["angular"]["z"])))
+            cmd_t.append(t_ns)
+            cmds.append(decode_twist(msg))
         elif topic == "/targets":
-            dets.append(
-                (t_ns, tuple(Detection(d["name"], d["bearing_rad"], d["range_m"]) for d in msg["detections"]))
-            )
+            dets.append((t_ns, decode_detections(msg)))
     missing = [t for t in ("/scan", "/cmd_vel") if t not in topics]
     if missing:
         raise LogError(f"{path}: the log has no {' and no '.join(missing)} messages")
@@ -198,19 +201,19 @@ def read_run(path: str | Path) -> Run:
     # without our metadata the max range is unknown: then no range counts as a sentinel (inf), which
     # is harmless to the primitives, which only look at returns nearer than d_max
     max_range = float(meta.get("laser_max_range_m", math.inf))
-    geom = _scan_geometry(first_scan, ranges.shape[1], max_range)
-    cmd = np.array(cmds, dtype=np.float64).reshape(-1, 3)
+    geom = scan_geometry(first_scan, ranges.shape[1], max_range)
+    cmd = np.array(cmds, dtype=np.float64).reshape(-1, 2)
     run_kwargs: dict[str, Any] = {}
     if sonars and first_sonar is not None:
         st = np.array([s[0] for s in sonars], dtype=np.int64)
         sr = _ranges_array([s[1] for s in sonars])
         run_kwargs["sonar_m"] = sr[hold(st, t)]
-        run_kwargs["sonar_geometry"] = _scan_geometry(
+        run_kwargs["sonar_geometry"] = scan_geometry(
             first_sonar, sr.shape[1], float(meta.get("sonar_max_range_m", math.inf))
         )
     if poses:
         pa = np.array(poses, dtype=np.float64)
-        run_kwargs["pose"] = pa[hold(pa[:, 0].astype(np.int64), t), 1:]
+        run_kwargs["pose"] = pa[hold(np.array(pose_t, dtype=np.int64), t)]
     if dets:
         dt = np.array([d[0] for d in dets], dtype=np.int64)
         idx = hold(dt, t)
@@ -227,9 +230,9 @@ def read_run(path: str | Path) -> Run:
         t_ns=t,
         geometry=geom,
         ranges_m=ranges,
-        cmd_t_ns=cmd[:, 0].astype(np.int64),
-        cmd_v_mps=cmd[:, 1],
-        cmd_omega_rps=cmd[:, 2],
+        cmd_t_ns=np.array(cmd_t, dtype=np.int64),
+        cmd_v_mps=cmd[:, 0],
+        cmd_omega_rps=cmd[:, 1],
         metadata=meta,
         world_yaml=world_yaml,
         topics=tuple(sorted(topics)),

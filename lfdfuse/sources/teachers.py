@@ -18,14 +18,12 @@ import numpy as np
 
 from lfdfuse.control.drive import DriveParams, heading_to_command
 from lfdfuse.control.safety import SafetyParams, free_heading
-from lfdfuse.errors import ConfigError
-from lfdfuse.files import read_yaml
 from lfdfuse.sim.robot import Pose, wrap_angle
 from lfdfuse.sim.sensors import CameraParams, Reading, ScanGeometry, target_reached
+from lfdfuse.sim.simulator import Observation
 from lfdfuse.sources.planner import Planner
+from lfdfuse.sources.tasks import Leg
 from lfdfuse.world.model import World
-
-STYLES = ("keep-left", "keep-center", "keep-right", "slalom", "pass-left", "pass-right")
 
 
 @dataclass(frozen=True)
@@ -45,47 +43,6 @@ class TeacherParams:
     noise_correlation: float = 0.8  # AR(1) coefficient per control period
     delay_steps: int = 1  # reaction delay in control periods
     side_sector_rad: float = math.radians(50.0)  # half width of the side sectors
-
-
-@dataclass(frozen=True)
-class Leg:
-    """One part of a task: reach ``target`` (or tour when None) in ``style``."""
-
-    target: str | None
-    style: str
-
-
-def parse_style(name: str) -> str:
-    if name not in STYLES:
-        raise ConfigError(f"unknown teacher style {name!r} (built-in styles: {', '.join(STYLES)})")
-    return name
-
-
-def parse_task(data: Any, *, origin: str) -> list[Leg]:
-    """Validate a task mapping ``{task: [{target, style}, ...]}``."""
-    if not isinstance(data, dict) or set(data) != {"task"}:
-        keys = sorted(set(data) - {"task"}) if isinstance(data, dict) else []
-        extra = f": unknown key {keys[0]!r}" if keys else ""
-        raise ConfigError(f"{origin}: a task file is a mapping with one key 'task'{extra}")
-    legs = data["task"]
-    if not isinstance(legs, list) or not legs:
-        raise ConfigError(f"{origin}: 'task' must be a non-empty list of {{target, style}}")
-    out: list[Leg] = []
-    for i, leg in enumerate(legs):
-        if not isinstance(leg, dict):
-            raise ConfigError(f"{origin}: task[{i}] must be a mapping {{target, style}}")
-        bad = sorted(set(leg) - {"target", "style"})
-        if bad:
-            raise ConfigError(f"{origin}: task[{i}]: unknown key {bad[0]!r} (valid: target, style)")
-        if "style" not in leg:
-            raise ConfigError(f"{origin}: task[{i}] needs a 'style'")
-        target = leg.get("target")
-        out.append(Leg(None if target is None else str(target), parse_style(str(leg["style"]))))
-    return out
-
-
-def load_task(path: str) -> list[Leg]:
-    return parse_task(read_yaml(path, what="task file"), origin=path)
 
 
 def side_range(
@@ -157,7 +114,8 @@ class StyleTeacher:
                 self._tour = [far, self.planner.farthest(*far)]
         return self._tour[0]
 
-    def command(self, pose: Pose, reading: Reading) -> tuple[float, float]:
+    def command(self, obs: Observation) -> tuple[float, float]:
+        pose, reading = obs.pose, obs.reading
         """The command ``(v, ω)`` for this control period."""
         self._steps += 1
         if self._last is not None:

@@ -24,7 +24,7 @@ from shapely.geometry import LineString, Point
 from lfdfuse.log import messages as msg
 from lfdfuse.sim.sensors import LaserParams
 from lfdfuse.sources.simulate import SimulateOptions, simulate
-from lfdfuse.sources.teachers import Leg
+from lfdfuse.sources.tasks import Leg
 from lfdfuse.world.model import load_world
 from lfdfuse.world.raycast import RayCaster
 
@@ -168,7 +168,7 @@ def _demo(folder: Path, seconds: float) -> Path:
 def bench_behaviors(rows: list[Row], folder: Path) -> None:
     from lfdfuse.behaviors.primitives import compute, resolve_behaviors
     from lfdfuse.log.reader import read_run
-    from lfdfuse.segment.pipeline import observations_of
+    from lfdfuse.segment.demo import observations_of
 
     run = read_run(_demo(folder, 600.0))
     obs = observations_of(run)
@@ -379,7 +379,8 @@ def _round_trip(rows: list[Row], folder: Path) -> None:
     from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
     from lfdfuse.evaluate.roundtrip import heading_errors, weight_errors
     from lfdfuse.execute.run import ExecuteOptions, drive_table
-    from lfdfuse.segment.pipeline import read_segmented, segment_file
+    from lfdfuse.segment.pipeline import segment_file
+    from lfdfuse.segment.read import read_segmented
     from lfdfuse.tools.samples import THREE_GOALS
 
     world = load_world("building")

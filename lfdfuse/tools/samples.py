@@ -12,7 +12,7 @@ from pathlib import Path
 import yaml
 
 from lfdfuse.sources.simulate import SimulateOptions, simulate
-from lfdfuse.sources.teachers import Leg
+from lfdfuse.sources.tasks import Leg
 from lfdfuse.world.model import load_world
 
 #: The paper's first physical scenario: left to goal 1, centre to goal 2, right to goal 3.

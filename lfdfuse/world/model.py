@@ -219,6 +219,13 @@ def check_pose_free(
 ) -> None:
     """Raise :class:`WorldError` when a robot disc at ``pose`` touches a wall or obstacle."""
     x, y, _ = pose
+    seg = world.segments
+    if len(seg):
+        xs, ys = seg[:, [0, 2]], seg[:, [1, 3]]
+        if not (xs.min() <= x <= xs.max() and ys.min() <= y <= ys.max()):
+            raise WorldError(
+                f"{what} ({x:g}, {y:g}) is outside the map (x {xs.min():g}..{xs.max():g}, y {ys.min():g}..{ys.max():g})"
+            )
     d = world.clearance(x, y)
     if d < radius:
         raise WorldError(f"{what} ({x:g}, {y:g}) is inside or within {radius:g} m of a wall or obstacle")

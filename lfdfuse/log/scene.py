@@ -1,0 +1,116 @@
+"""Scene updates for viewers: the world (walls, obstacles, targets) and the fusion overlay arrows."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from lfdfuse.log.stamps import IDENTITY_POSE, MAP_FRAME, ROBOT_FRAME, quat_z, stamp
+from lfdfuse.world.model import World
+
+
+def _color(r: float, g: float, b: float, a: float = 1.0) -> dict[str, float]:
+    return {"r": r, "g": g, "b": b, "a": a}
+
+
+def _entity(t_ns: int, entity_id: str, frame_id: str, **prims: list[dict[str, Any]]) -> dict[str, Any]:
+    ent: dict[str, Any] = {
+        "timestamp": stamp(t_ns),
+        "frame_id": frame_id,
+        "id": entity_id,
+        "lifetime": {"sec": 0, "nsec": 0},
+        "frame_locked": False,
+        "metadata": [],
+    }
+    for kind in ("arrows", "cubes", "spheres", "cylinders", "lines", "triangles", "texts", "models"):
+        ent[kind] = prims.get(kind, [])
+    return ent
+
+
+def _line(
+    points: list[tuple[float, float]], color: dict[str, float], thickness: float = 0.05
+) -> dict[str, Any]:
+    return {
+        "type": 0,
+        "pose": IDENTITY_POSE,
+        "thickness": thickness,
+        "scale_invariant": False,
+        "points": [{"x": x, "y": y, "z": 0.0} for x, y in points],
+        "color": color,
+        "colors": [],
+        "indices": [],
+    }
+
+
+def world_scene(t_ns: int, world: World) -> dict[str, Any]:
+    """A ``foxglove.SceneUpdate`` drawing walls, obstacles and targets in the map frame."""
+    grey = _color(0.2, 0.2, 0.25)
+    walls = [_line([tuple(p) for p in w], grey) for w in world.walls]  # type: ignore[misc]
+    obstacles = [
+        _line(list(ob.polygon().exterior.coords), _color(0.55, 0.35, 0.15), 0.04) for ob in world.obstacles
+    ]
+    cylinders = [
+        {
+            "pose": {"position": {"x": t.x, "y": t.y, "z": 0.25}, "orientation": quat_z(0.0)},
+            "size": {"x": 2 * t.radius, "y": 2 * t.radius, "z": 0.5},
+            "bottom_scale": 1.0,
+            "top_scale": 1.0,
+            "color": _color(*t.color),
+        }
+        for t in world.targets
+    ]
+    texts = [
+        {
+            "pose": {"position": {"x": t.x, "y": t.y, "z": 0.7}, "orientation": quat_z(0.0)},
+            "billboard": True,
+            "font_size": 14.0,
+            "scale_invariant": True,
+            "color": _color(*t.color),
+            "text": t.name,
+        }
+        for t in world.targets
+    ]
+    return {
+        "deletions": [],
+        "entities": [
+            _entity(t_ns, "walls", MAP_FRAME, lines=walls + obstacles),
+            _entity(t_ns, "targets", MAP_FRAME, cylinders=cylinders, texts=texts),
+        ],
+    }
+
+
+@dataclass(frozen=True)
+class Arrow:
+    """An overlay arrow in the robot frame: its vector and colour."""
+
+    vx: float
+    vy: float
+    color: tuple[float, float, float]
+    scale_m: float = 1.0
+
+
+def arrow_scene(t_ns: int, entity_id: str, arrows: Sequence[Arrow]) -> dict[str, Any]:
+    """A ``foxglove.SceneUpdate`` with arrows in the robot frame (behaviour overlay)."""
+    prims = []
+    for a in arrows:
+        length = math.hypot(a.vx, a.vy) * a.scale_m
+        if length <= 1e-6:
+            continue
+        prims.append(
+            {
+                "pose": {
+                    "position": {"x": 0.0, "y": 0.0, "z": 0.3},
+                    "orientation": quat_z(math.atan2(a.vy, a.vx)),
+                },
+                "shaft_length": max(length - 0.1, 0.01),
+                "shaft_diameter": 0.03,
+                "head_length": 0.1,
+                "head_diameter": 0.08,
+                "color": _color(*a.color),
+            }
+        )
+    ent = _entity(t_ns, entity_id, ROBOT_FRAME, arrows=prims)
+    ent["frame_locked"] = True
+    return {"deletions": [], "entities": [ent]}
