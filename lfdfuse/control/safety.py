@@ -25,7 +25,8 @@ def free_heading(
     rel_rad: float, ranges_m: np.ndarray, angles_rad: np.ndarray, p: SafetyParams = SafetyParams()
 ) -> float:
     """The free robot-frame heading nearest ``rel_rad`` (see the module docstring)."""
-    r1 = np.where(np.isfinite(ranges_m) & (ranges_m > 0), ranges_m, np.inf)
+    # no return (inf, NaN, 0) counts as range 0 here, which no strip test accepts (along > 0)
+    r1 = np.where(np.isfinite(ranges_m) & (ranges_m > 0), ranges_m, 0.0)
     d1 = angles_rad - rel_rad
     along1 = r1 * np.cos(d1)
     if not ((along1 > 0) & (along1 < p.lookahead_m) & (np.abs(r1 * np.sin(d1)) < p.halfwidth_m)).any():
@@ -34,7 +35,7 @@ def free_heading(
     first, second = (-offsets, offsets) if rel_rad < 0 else (offsets, -offsets)
     cands = np.concatenate([[rel_rad], rel_rad + np.column_stack([first, second]).ravel()])
     diff = angles_rad[None, :] - cands[:, None]
-    r = np.where(np.isfinite(ranges_m) & (ranges_m > 0), ranges_m, np.inf)[None, :]
+    r = r1[None, :]
     along = r * np.cos(diff)
     lateral = np.abs(r * np.sin(diff))
     blocked = ((along > 0) & (along < p.lookahead_m) & (lateral < p.halfwidth_m)).any(axis=1)

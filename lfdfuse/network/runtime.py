@@ -10,7 +10,6 @@ achieved.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -117,7 +116,3 @@ def step_name_of(path: Path, table: FusionTable) -> str:
         if step.network is not None:
             net = step.network
     return "/".join(names)
-
-
-def heading_of(v: np.ndarray) -> float:
-    return math.atan2(float(v[1]), float(v[0]))

@@ -6,9 +6,9 @@ same bytes.
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
+import typer
 import yaml
 
 from lfdfuse.sources.simulate import SimulateOptions, simulate
@@ -68,5 +68,11 @@ def generate(folder: Path) -> list[Path]:
     return out
 
 
+def main(folder: Path = typer.Argument(Path("sample_logs"), help="Where to write the sample logs.")) -> None:
+    """Regenerate the sample logs (same code, same bytes)."""
+    for path in generate(folder):
+        typer.echo(path)
+
+
 if __name__ == "__main__":
-    generate(Path(sys.argv[1] if len(sys.argv) > 1 else "sample_logs"))
+    typer.run(main)

@@ -1,0 +1,436 @@
+"""Pipeline benchmarks: speed of every stage, each beside a baseline measured in the same run.
+
+Ratios to the in-run baseline are what to compare across machines; absolute rates depend on a
+shared, noisy machine. :mod:`lfdfuse.tools.bench` runs these with the other suites.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+import orjson
+import shapely
+from shapely.geometry import LineString, Point
+
+from lfdfuse.log import messages as msg
+from lfdfuse.sim.sensors import LaserParams
+from lfdfuse.sources.simulate import SimulateOptions, simulate
+from lfdfuse.sources.tasks import Leg
+from lfdfuse.world.model import load_world
+from lfdfuse.world.raycast import RayCaster
+
+
+@dataclass(frozen=True)
+class Row:
+    name: str
+    rate: float
+    unit: str
+    baseline: str
+    baseline_rate: float
+    target: float | None = None
+
+    @property
+    def ratio(self) -> float:
+        return self.rate / self.baseline_rate if self.baseline_rate > 0 else math.inf
+
+
+def rate(fn: Callable[[], int], *, min_s: float = 1.0) -> float:
+    """Items per second of ``fn`` (which returns how many items it did), over at least ``min_s``."""
+    done, t0 = 0, time.perf_counter()
+    while True:
+        done += fn()
+        el = time.perf_counter() - t0
+        if el >= min_s:
+            return done / el
+
+
+def box_map(n_segments: int, seed: int = 0) -> np.ndarray:
+    """A 40 × 30 m hall with axis-aligned boxes: about ``n_segments`` segments."""
+    rng = np.random.default_rng(seed)
+    segs: list[list[float]] = [[0, 0, 40, 0], [40, 0, 40, 30], [40, 30, 0, 30], [0, 30, 0, 0]]
+    while len(segs) < n_segments:
+        x, y = rng.uniform(1, 38), rng.uniform(1, 28)
+        w, h = rng.uniform(0.2, 1.5), rng.uniform(0.2, 1.5)
+        segs += [[x, y, x + w, y], [x + w, y, x + w, y + h], [x + w, y + h, x, y + h], [x, y + h, x, y]]
+    return np.asarray(segs[:n_segments], dtype=np.float64)
+
+
+def naive_cast(
+    geom: shapely.Geometry, x: float, y: float, angles: np.ndarray, max_range: float
+) -> np.ndarray:
+    """Per-ray shapely intersection: the straightforward raycaster."""
+    out = np.empty(len(angles))
+    origin = Point(x, y)
+    for i, a in enumerate(angles):
+        ray = LineString([(x, y), (x + max_range * math.cos(a), y + max_range * math.sin(a))])
+        hit = ray.intersection(geom)
+        out[i] = max_range if hit.is_empty else min(max_range, origin.distance(hit))
+    return out
+
+
+def bench_raycast(rows: list[Row]) -> None:
+    angles = LaserParams().geometry.angles
+    for n in (50, 200, 1000):
+        segs = box_map(n)
+        rc = RayCaster(segs, max_range_m=8.0)
+        geom = shapely.MultiLineString([((a, b), (c, d)) for a, b, c, d in segs])
+        rng = np.random.default_rng(1)
+        poses = rng.uniform([1, 1, -np.pi], [39, 29, np.pi], (500, 3))
+
+        def fast() -> int:
+            for x, y, th in poses:
+                rc.cast(x, y, angles + th)
+            return len(poses)
+
+        def naive() -> int:
+            for x, y, th in poses[:3]:
+                naive_cast(geom, x, y, angles + th, 8.0)
+            return 3
+
+        rows.append(
+            Row(
+                f"laser scans, {n} segments",
+                rate(fast),
+                "scans/s",
+                "per-ray shapely",
+                rate(naive, min_s=0.5),
+                5000.0 if n == 200 else None,
+            )
+        )
+
+
+def bench_simulate(rows: list[Row]) -> None:
+    world = load_world("building")
+    opts = SimulateOptions(
+        world=world, legs=[Leg(None, "keep-left")], teacher_name="keep-left", duration_s=120.0, seed=1
+    )
+    with tempfile.TemporaryDirectory() as d:
+        t0 = time.perf_counter()
+        s = simulate(opts, out=Path(d) / "b.mcap")
+        sps = s.steps / (time.perf_counter() - t0)
+    rows.append(
+        Row("simulate building, all sensors + MCAP", sps, "steps/s", "real time (10 Hz)", 10.0, 1000.0)
+    )
+
+
+def bench_encoding(rows: list[Row]) -> None:
+    rng = np.random.default_rng(0)
+    geom = LaserParams().geometry
+    scans = rng.uniform(0, 8, (200, 181))
+
+    def with_orjson() -> int:
+        for r in scans:
+            orjson.dumps(msg.laser_scan(0, r, geom))
+        return len(scans)
+
+    def with_json_full() -> int:
+        for r in scans:
+            m = msg.laser_scan(0, r, geom)
+            m["ranges"] = r.tolist()
+            json.dumps(m).encode()
+        return len(scans)
+
+    rows.append(
+        Row(
+            "scan JSON encoding (orjson, mm)",
+            rate(with_orjson, min_s=0.5),
+            "msgs/s",
+            "json, full precision",
+            rate(with_json_full, min_s=0.5),
+        )
+    )
+
+
+def _demo(folder: Path, seconds: float) -> Path:
+    """A keep-left building tour of ``seconds`` (the 10-minute demo of the stage benches)."""
+    out = folder / f"demo{int(seconds)}.mcap"
+    if not out.exists():
+        opts = SimulateOptions(
+            world=load_world("building"),
+            legs=[Leg(None, "keep-left")],
+            teacher_name="keep-left",
+            duration_s=seconds,
+            seed=2,
+        )
+        simulate(opts, out=out)
+    return out
+
+
+def bench_behaviors(rows: list[Row], folder: Path) -> None:
+    from lfdfuse.behaviors.primitives import compute, resolve_behaviors
+    from lfdfuse.log.reader import read_run
+    from lfdfuse.segment.demo import observations_of
+
+    run = read_run(_demo(folder, 600.0))
+    obs = observations_of(run)
+    for preset, target in (("scenario3", 20000.0), ("full", None)):
+        names = resolve_behaviors(preset, obs.target_names)
+
+        def whole() -> int:
+            compute(obs, names)
+            return len(run)
+
+        def per_scan() -> int:
+            for k in range(200):
+                one = type(obs)(
+                    obs.ranges_m[k : k + 1],
+                    obs.geometry,
+                    None if obs.sonar_m is None else obs.sonar_m[k : k + 1],
+                    obs.sonar_angles_rad,
+                    obs.sonar_max_m,
+                    obs.target_names,
+                    obs.target_bearing_rad[k : k + 1],
+                    obs.target_range_m[k : k + 1],
+                )
+                compute(one, names)
+            return 200
+
+        rows.append(
+            Row(
+                f"behaviour outputs, {preset}, whole log",
+                rate(whole),
+                "scans/s",
+                "per-scan loop",
+                rate(per_scan),
+                target,
+            )
+        )
+
+
+def bench_segment(rows: list[Row], folder: Path) -> None:
+    from lfdfuse.segment.pipeline import segment_file
+
+    src = _demo(folder, 600.0)
+    t0 = time.perf_counter()
+    segment_file(src, out=folder / "demo600.seg.mcap")
+    el = time.perf_counter() - t0
+    rows.append(Row("segment end to end, 10-minute demo", 600.0 / el, "x realtime", "real time", 1.0))
+    rows.append(Row("segment end to end, 10-minute demo (s)", el, "s", "-", 0.0))
+
+
+def bench_pf(rows: list[Row], folder: Path) -> None:
+    from lfdfuse.estimate.pf import PFParams, reference_step, step
+
+    k, m, n = 30, 1000, 6
+    p = PFParams(particles=m)
+    rng = np.random.default_rng(0)
+    s0 = rng.uniform(0, 1, (k, m, n))
+    v = rng.normal(0, 0.5, (n, 2))
+    vr = np.array([1.0, 0.0])
+    noise = rng.standard_normal((k, m, n))
+    u = rng.uniform(0, 1, k)
+    state = {"s": s0, "w": np.zeros((k, m))}
+
+    def fast() -> int:
+        # fresh random numbers each step, as in the filter (their cost is part of the rate)
+        nz = rng.standard_normal((k, m, n))
+        uu = rng.uniform(0, 1, k)
+        state["s"], state["w"], _ = step(state["s"], state["w"], v, vr, nz, uu, 0.01, p)
+        return k * m
+
+    small = (s0[:1, :200], np.zeros((1, 200)), noise[:1, :200], u[:1])
+
+    def naive() -> int:
+        reference_step(small[0], small[1], v, vr, small[2], small[3], 0.01, p)
+        return 200
+
+    a = step(small[0], small[1], v, vr, small[2], small[3], 0.01, p)
+    b = reference_step(small[0], small[1], v, vr, small[2], small[3], 0.01, p)
+    assert all(np.allclose(x, y) for x, y in zip(a, b, strict=True)), "vectorised and naive steps disagree"
+    rows.append(
+        Row(
+            "particle filter, N=6, M=1000, K=30",
+            rate(fast),
+            "particle-steps/s",
+            "per-particle Python loop",
+            rate(naive),
+            8e6,
+        )
+    )
+
+
+def bench_estimate(rows: list[Row], folder: Path) -> None:
+    from lfdfuse.estimate.pipeline import EstimateOptions, estimate_file
+    from lfdfuse.segment.pipeline import segment_file
+
+    seg = folder / "demo600.seg.mcap"
+    if not seg.exists():
+        segment_file(_demo(folder, 600.0), out=seg)
+    for trials in (1, 30):
+        t0 = time.perf_counter()
+        estimate_file(seg, out=folder / "f.yaml", opts=EstimateOptions(trials=trials))
+        rows.append(
+            Row(
+                f"estimate end to end, 10-minute demo, K={trials} (s)",
+                time.perf_counter() - t0,
+                "s",
+                "-",
+                0.0,
+            )
+        )
+
+
+def bench_execute(rows: list[Row], folder: Path) -> None:
+    from lfdfuse.estimate.pipeline import EstimateOptions, estimate_file
+    from lfdfuse.execute.run import ExecuteOptions, drive_table
+    from lfdfuse.network.table import load_table
+    from lfdfuse.segment.pipeline import segment_file
+
+    world = load_world("building")
+    legs = [Leg("red", "keep-left"), Leg("green", "keep-center"), Leg("blue", "keep-right")]
+    demo = folder / "task.mcap"
+    t0 = time.perf_counter()
+    s = simulate(
+        SimulateOptions(world=world, legs=legs, teacher_name="task", duration_s=400.0, seed=1), out=demo
+    )
+    sim_rate = s.steps / (time.perf_counter() - t0)
+    segment_file(demo, out=folder / "task.seg.mcap")
+    estimate_file(folder / "task.seg.mcap", out=folder / "task.yaml", opts=EstimateOptions())
+    table = load_table(folder / "task.yaml")
+    t0 = time.perf_counter()
+    r = drive_table(
+        ExecuteOptions(world=world, table=table, max_time_s=300.0), out=folder / "run.mcap", command="execute"
+    )
+    rows.append(
+        Row(
+            "execute building, with /lfd logging",
+            r.summary.steps / (time.perf_counter() - t0),
+            "ticks/s",
+            "simulate, same task",
+            sim_rate,
+            1000.0,
+        )
+    )
+
+
+def bench_demo(rows: list[Row], folder: Path) -> None:
+    import subprocess
+
+    root = Path(__file__).resolve().parents[1]
+    if not (root / "Makefile").exists():
+        return
+    t0 = time.perf_counter()
+    subprocess.run(
+        ["make", "-s", "demo", f"VENV={sys.prefix}", f"DEMO={folder / 'demo'}"],
+        cwd=root,
+        check=True,
+        capture_output=True,
+    )
+    rows.append(Row("make demo pipeline, environment ready (s)", time.perf_counter() - t0, "s", "-", 0.0))
+
+
+def bench_quality(rows: list[Row], folder: Path) -> None:
+    """Estimation quality (not speed): synthetic recovery and the round trip, per method."""
+    from lfdfuse.estimate.baselines import angle_errors, nnls_weights
+    from lfdfuse.estimate.pf import PFParams, run_filter
+
+    for t in (100, 600, 2400):
+        res: dict[str, list[tuple[float, float]]] = {"vonmises": [], "paper": [], "nnls": []}
+        for seed in range(5):
+            rng = np.random.default_rng(seed)
+            n = 5
+            w = rng.dirichlet(np.ones(n))
+            ang = rng.uniform(-np.pi, np.pi, (t + 300, n))
+            mag = rng.uniform(0.2, 1.0, (t + 300, n))
+            v = np.stack([mag * np.cos(ang), mag * np.sin(ang)], axis=-1)
+            f = np.einsum("tnd,n->td", v, w)
+            th = np.arctan2(f[:, 1], f[:, 0]) + rng.normal(0.0, math.radians(5.0), t + 300)
+            vr = np.stack([np.cos(th), np.sin(th)], axis=-1)
+            tr, te = slice(0, t), slice(t, t + 300)
+            floor = angle_errors(v[te], vr[te], w).mean()
+            for name in res:
+                if name == "nnls":
+                    est = nnls_weights(v[tr], vr[tr])
+                    est = est / est.sum()
+                else:
+                    p = PFParams(likelihood=name)  # type: ignore[arg-type]
+                    est = run_filter(
+                        v[tr], vr[tr], trials=1, rng=np.random.default_rng(100 + seed), params=p
+                    ).weights[0]
+                res[name].append(
+                    (float(np.abs(est - w).sum()), float(angle_errors(v[te], vr[te], est).mean() / floor))
+                )
+        for name, vals in res.items():
+            a = np.array(vals)
+            rows.append(Row(f"synthetic {t} steps, {name}: L1", float(a[:, 0].mean()), "L1", "-", 0.0))
+            rows.append(
+                Row(
+                    f"synthetic {t} steps, {name}: held-out err/floor",
+                    float(a[:, 1].mean()),
+                    "ratio",
+                    "-",
+                    0.0,
+                )
+            )
+    _round_trip(rows, folder)
+
+
+def _round_trip(rows: list[Row], folder: Path) -> None:
+    from lfdfuse.estimate.pf import PFParams
+    from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
+    from lfdfuse.evaluate.roundtrip import heading_errors, weight_errors
+    from lfdfuse.execute.run import ExecuteOptions, drive_table
+    from lfdfuse.segment.pipeline import segment_file
+    from lfdfuse.segment.read import read_segmented
+    from lfdfuse.tools.samples import THREE_GOALS
+
+    world = load_world("building")
+    simulate(
+        SimulateOptions(world=world, legs=THREE_GOALS, teacher_name="task", duration_s=400.0, seed=1),
+        out=folder / "rt.mcap",
+    )
+    segment_file(folder / "rt.mcap", out=folder / "rt.seg.mcap")
+    truth, _, _ = estimate_run(read_segmented(folder / "rt.seg.mcap"), opts=EstimateOptions())
+    runs = []
+    for seed in (11, 12):
+        opts = ExecuteOptions(
+            world=world, table=truth, max_time_s=300.0, seed=seed, heading_noise_rad=math.radians(5.0)
+        )
+        drive_table(opts, out=folder / f"rt{seed}.mcap", command="simulate", teacher=True)
+        segment_file(
+            folder / f"rt{seed}.mcap", out=folder / f"rt{seed}.seg.mcap", behaviors=",".join(truth.behaviors)
+        )
+        runs.append(read_segmented(folder / f"rt{seed}.seg.mcap"))
+    for label, eo in (
+        ("vonmises", EstimateOptions()),
+        ("paper", EstimateOptions(pf=PFParams(likelihood="paper"))),
+        ("nnls", EstimateOptions(method="nnls")),
+    ):
+        learned, _, _ = estimate_run(runs[0], opts=eo)
+        errs = weight_errors(truth, learned)
+        rows.append(
+            Row(f"round trip {label}: max row L1 (>= 50 samples)", max(e.l1 for e in errs), "L1", "-", 0.0)
+        )
+        ratio = heading_errors(learned, runs[1]).mean() / heading_errors(truth, runs[1]).mean()
+        rows.append(Row(f"round trip {label}: held-out err / true table's", float(ratio), "ratio", "-", 0.0))
+
+
+BENCHES: dict[str, Callable[[list[Row], Path], None]] = {
+    "raycast": lambda rows, _f: bench_raycast(rows),
+    "simulate": lambda rows, _f: bench_simulate(rows),
+    "encoding": lambda rows, _f: bench_encoding(rows),
+    "behaviors": bench_behaviors,
+    "segment": bench_segment,
+    "pf": bench_pf,
+    "estimate": bench_estimate,
+    "execute": bench_execute,
+    "demo": bench_demo,
+    "quality": bench_quality,
+}
+
+
+def run(quick: bool, folder: Path, only: list[str] | None = None) -> list[dict[str, object]]:
+    """Run the pipeline suites (all, or ``only`` those named) and return their rows."""
+    rows: list[Row] = []
+    for name, fn in BENCHES.items():
+        if only is None or name in only:
+            fn(rows, folder)
+    return [asdict(r) | {"ratio": r.ratio} for r in rows]

@@ -1,0 +1,50 @@
+"""The safety reflex: the free heading nearest the wanted one, never into a return just ahead."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lfdfuse.control.safety import SafetyParams, free_heading
+
+ANGLES = np.radians(np.arange(-90.0, 90.5, 1.0))
+P = SafetyParams()
+
+
+def blocked(heading: float, ranges: np.ndarray) -> bool:
+    d = ANGLES - heading
+    along, lateral = ranges * np.cos(d), np.abs(ranges * np.sin(d))
+    return bool(((along > 0) & (along < P.lookahead_m) & (lateral < P.halfwidth_m)).any())
+
+
+def test_a_free_heading_is_kept() -> None:
+    ranges = np.full(ANGLES.shape, 8.0)
+    assert free_heading(0.3, ranges, ANGLES, P) == 0.3
+
+
+def test_a_wall_just_ahead_turns_the_robot_away() -> None:
+    ranges = np.full(ANGLES.shape, 8.0)
+    ranges[np.abs(ANGLES) < math.radians(20)] = 0.4  # an obstacle dead ahead
+    h = free_heading(0.0, ranges, ANGLES, P)
+    assert h != 0.0 and not blocked(h, ranges)
+
+
+def test_boxed_in_it_turns_on_the_spot() -> None:
+    ranges = np.full(ANGLES.shape, 0.3)
+    assert abs(free_heading(0.1, ranges, ANGLES, P)) > math.pi / 2
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.floats(-1.4, 1.4), st.integers(0, 2**31 - 1))
+def test_the_reflex_never_picks_a_blocked_heading_and_stays_within_90_degrees(want: float, seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    ranges = rng.uniform(0.2, 8.0, ANGLES.shape)
+    ranges[rng.random(ANGLES.shape) < 0.3] = np.inf  # no return
+    h = free_heading(want, ranges, ANGLES, P)
+    if abs(h) <= math.pi / 2 + 1e-9 and abs(h - want) <= math.pi / 2 + 1e-9:
+        assert not blocked(h, np.where(np.isfinite(ranges), ranges, 0.0))
+    else:  # nothing free within ±90° of the wanted heading: a turn on the spot
+        assert abs(h) > math.pi / 2

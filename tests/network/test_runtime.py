@@ -1,0 +1,101 @@
+"""The behaviour network runtime: active step, goals, and the fallbacks for unseen BACs."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lfdfuse.behaviors.primitives import BehaviorOutputs
+from lfdfuse.network.runtime import NetworkRuntime, step_name_of
+from lfdfuse.network.table import FusionTable, parse_table
+
+NAMES = ("avoid", "attract_red", "wander", "attract_blue")
+
+
+def table(**over: Any) -> FusionTable:
+    data: dict[str, Any] = {
+        "format": "lfdfuse/fusion-table@1",
+        "behaviors": list(NAMES),
+        "default_weights": {"avoid": 0.5, "wander": 0.5},
+        "network": {
+            "name": "t",
+            "steps": [
+                {
+                    "name": "reach-red",
+                    "goal": {"target": "red"},
+                    "default_weights": {"wander": 1.0},
+                    "fusion": [{"bac": 0b0111, "weights": {"avoid": 0.2, "attract_red": 0.7, "wander": 0.1}}],
+                },
+                {
+                    "name": "reach-blue",
+                    "goal": {"target": "blue"},
+                    "fusion": [{"bac": 0b1101, "weights": {"avoid": 0.3, "attract_blue": 0.7}}],
+                },
+            ],
+        },
+    }
+    data.update(over)
+    return parse_table(data)
+
+
+def outputs(vectors: np.ndarray, applicable: list[bool]) -> BehaviorOutputs:
+    return BehaviorOutputs(NAMES, vectors[None], np.array([applicable]), np.zeros((1, len(NAMES)), bool))
+
+
+VEC = np.array([[1.0, 0.0], [0.0, 1.0], [0.6, -0.8], [-1.0, 0.0]])
+
+
+def test_a_seen_bac_fuses_its_row() -> None:
+    dec = NetworkRuntime(table()).decide(outputs(VEC, [True, True, True, False]), set())
+    assert dec.bac == 0b0111 and not dec.unseen
+    assert np.allclose(dec.fused, 0.2 * VEC[0] + 0.7 * VEC[1] + 0.1 * VEC[2])
+
+
+def test_an_unseen_bac_uses_the_steps_default_then_the_tables() -> None:
+    rt = NetworkRuntime(table())
+    dec = rt.decide(outputs(VEC, [True, False, True, False]), set())  # bac 0b0101: never seen in step 0
+    assert dec.unseen and dec.weights == {"wander": 1.0} and np.allclose(dec.fused, VEC[2])
+    rt.decide(outputs(VEC, [True, True, True, False]), {"red"})  # red reached: step 1 is active
+    dec = rt.decide(outputs(VEC, [True, False, True, False]), set())
+    assert dec.unseen and dec.weights == {"avoid": 0.5, "wander": 0.5}  # step 1 has no own default
+    assert step_name_of(dec.path, rt.table) == "reach-blue"
+
+
+def test_a_row_whose_fusion_cancels_falls_back_to_the_default() -> None:
+    vec = VEC.copy()
+    vec[1] = -(0.2 * vec[0] + 0.1 * vec[2]) / 0.7  # the row's weighted sum is exactly zero
+    dec = NetworkRuntime(table()).decide(outputs(vec, [True, True, True, False]), set())
+    assert np.allclose(dec.fused, vec[2])  # the step's default: wander
+
+
+def test_goals_are_reached_in_order_and_stay_achieved() -> None:
+    rt = NetworkRuntime(table())
+    o = outputs(VEC, [True, True, True, True])
+    assert rt.decide(o, {"blue"}).achieved_now == ()  # blue is not the active goal yet
+    assert rt.decide(o, {"red"}).achieved_now == ("red",)
+    assert rt.decide(o, set()).step is not None and not rt.complete  # red stays achieved
+    dec = rt.decide(o, {"blue"})
+    assert dec.achieved_now == ("blue",) and dec.step is None and rt.complete
+
+
+def test_a_network_without_goals_never_completes() -> None:
+    t = table(network={"name": "free", "steps": [{"name": "free", "goal": None, "fusion": []}]})
+    rt = NetworkRuntime(t)
+    for _ in range(3):
+        dec = rt.decide(outputs(VEC, [True, False, True, False]), {"red", "blue"})
+        assert dec.step is not None and dec.unseen
+    assert not rt.complete
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.booleans(), min_size=4, max_size=4), st.integers(0, 2**31 - 1))
+def test_the_fused_vector_is_the_weighted_sum_of_applicable_outputs(app: list[bool], seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    vec = rng.uniform(-1, 1, (4, 2))
+    dec = NetworkRuntime(table()).decide(outputs(vec, app), set())
+    expect = sum(w * vec[NAMES.index(n)] for n, w in dec.weights.items())
+    if float(np.hypot(*expect)) > 1e-9:
+        assert np.allclose(dec.fused, expect)
