@@ -2,7 +2,17 @@
 
 from __future__ import annotations
 
-from lfdfuse.cli import estimate, execute, inspect, segment, simulate, worlds  # noqa: F401  (registers commands)
+# every command module registers itself on the app when imported (one line each)
+from lfdfuse.cli import (
+    estimate,  # noqa: F401
+    evaluate,  # noqa: F401
+    execute,  # noqa: F401
+    import_cmd,  # noqa: F401
+    inspect,  # noqa: F401
+    segment,  # noqa: F401
+    simulate,  # noqa: F401
+    worlds,  # noqa: F401
+)
 from lfdfuse.cli.app import app
 
 __all__ = ["app", "main"]
