@@ -7,7 +7,10 @@ computes one scan (live, ``N = 1``) and a whole log (offline); shapes are ``(N, 
 A laser beam has *no return* when its range is inf, NaN, ≤ 0, or at/above the scanner's max
 range (the sentinel real scanners and our logs use); such beams count as open space. Beams
 outside a behaviour's sector are ignored, so any scanner geometry works (180°, 240°, 360°, any
-start angle and increment).
+start angle and increment): sectors are chosen by beam bearing, never by beam index, the rear
+beams of a 360° scanner belong to ``avoid`` only, and a beam repeating an earlier bearing (a
+360° + 1 scanner) is ignored. A log without sonar or camera makes ``sonar_avoid`` and
+``attract_*`` never applicable.
 
 Magnitudes (how strongly a primitive pulls; a sum of contributions is rescaled into the unit
 disc, never clipped per component):
@@ -192,6 +195,22 @@ def _pool_strongest(weights: np.ndarray, dirs: np.ndarray) -> np.ndarray:
     return s * scale[:, None]
 
 
+def distinct_beams(g: ScanGeometry) -> np.ndarray:
+    """``(B,)`` mask of beams whose bearing no earlier beam already has.
+
+    A scanner sweeping more than a full turn (the Neato's 361 beams from −π to +π) repeats its
+    first bearings at the end; counting them twice would tilt every sum toward the seam.
+
+    >>> distinct_beams(ScanGeometry(-math.pi, math.pi / 180, 361, 5.0)).sum()
+    np.int64(360)
+    """
+    own = np.ones(g.count, dtype=bool)
+    step = abs(g.increment_rad)
+    if g.count > 1 and step > 0 and step * (g.count - 1) >= 2 * math.pi - step / 2:
+        own[int(round(2 * math.pi / step)) :] = False
+    return own
+
+
 def compute(
     obs: Observations, names: Sequence[str], params: BehaviorParams = BehaviorParams()
 ) -> BehaviorOutputs:
@@ -201,14 +220,15 @@ def compute(
     g = obs.geometry
     ang = _wrap(g.angles)
     dirs = np.column_stack([np.cos(ang), np.sin(ang)])
-    valid = np.isfinite(r) & (r > 0.0) & (r < g.max_range_m)
+    own = distinct_beams(g)  # a beam repeating an earlier bearing (360° + 1 scanners) is ignored
+    valid = np.isfinite(r) & (r > 0.0) & (r < g.max_range_m) & own[None, :]
     d = params.d_max_m
     near = valid & (r < d)
     rn = np.where(near, r, d)  # ranges of near returns, d elsewhere
-    front = np.abs(ang) <= math.pi / 2 + 1e-9
-    left = (ang >= -1e-9) & (ang <= params.side_sector_rad + 1e-9)
-    right = (ang <= 1e-9) & (ang >= -params.side_sector_rad - 1e-9)
-    cone = np.abs(ang) <= params.front_cone_rad / 2 + 1e-9
+    front = (np.abs(ang) <= math.pi / 2 + 1e-9) & own
+    left = (ang >= -1e-9) & (ang <= params.side_sector_rad + 1e-9) & own
+    right = (ang <= 1e-9) & (ang >= -params.side_sector_rad - 1e-9) & own
+    cone = (np.abs(ang) <= params.front_cone_rad / 2 + 1e-9) & own
     push = np.where(near, (d - rn) / d, 0.0)  # (N, B) repulsion strength
 
     k = len(names)
