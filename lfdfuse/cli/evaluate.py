@@ -53,11 +53,10 @@ def evaluate_cmd(
     )
     table = Table(box=None, header_style="bold")
     table.add_column("method")
-    table.add_column("heading error °", justify="right")
+    table.add_column("error °", justify="right")
     table.add_column("95 % interval", justify="right")
     table.add_column("median °", justify="right")
     table.add_column(f"turns ° ({ev.turning_steps})", justify="right")
-    table.add_column("what it is")
     for name in METHODS:
         s = ev.methods[name]
         table.add_row(
@@ -66,8 +65,8 @@ def evaluate_cmd(
             f"{s.ci95_deg[0]:.1f}–{s.ci95_deg[1]:.1f}",
             f"{s.median_deg:.1f}",
             f"{s.turning_error_deg:.1f}",
-            _WHAT[name],
         )
     console.print(table)
+    console.print("  " + "; ".join(f"{k}: {v}" for k, v in _WHAT.items()) + ".")
     for line in reading(ev):
         console.print(f"  {line}")

@@ -8,7 +8,8 @@ with ``/lfd/behaviors``, ``/lfd/demo``, ``/lfd/bac`` and ``/lfd/segment`` interl
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -29,6 +30,7 @@ from lfdfuse.log.writer import LogWriter
 from lfdfuse.segment.demo import demonstrated, lag_ns_of, observations_of
 from lfdfuse.segment.goals import Segmentation, segment_outputs
 from lfdfuse.segment.lag import LagFit, lag_fits
+from lfdfuse.sources.importers import require_lfdfuse_log
 
 
 @dataclass(frozen=True)
@@ -48,12 +50,20 @@ def segment_file(
     out: str | Path,
     behaviors: str = DEFAULT_PRESET,
     params: BehaviorParams | None = None,
-    drive: DriveParams = DriveParams(),
+    drive: DriveParams | None = None,
     lag_s: float = 0.0,
     measure_lag: bool = True,
 ) -> SegmentResult:
-    """Read a demo log, compute behaviours, segment, and write the segmented log to ``out``."""
+    """Read a demo log, compute behaviours, segment, and write the segmented log to ``out``.
+
+    The robot's limits for the command → heading mapping come from ``drive``, else from the
+    log's provenance (``v_max_mps``, ``omega_max_rps``: an imported robot's own), else the
+    simulated robot's.
+    """
+    require_lfdfuse_log(src)
     run = read_run(src)
+    if drive is None:
+        drive = drive_params_of(run.metadata)
     if len(run) == 0:
         raise LogError(f"{src}: the log is empty")
     obs = observations_of(run)
@@ -91,6 +101,19 @@ def segment_file(
             log.write_raw(*item)
     fits = tuple(lag_fits(run, outputs, drive)) if measure_lag else ()
     return SegmentResult(tuple(names), segm, run.t_ns, ok, str(out), lag_s, fits)
+
+
+def drive_params_of(metadata: dict[str, str]) -> DriveParams:
+    """The robot's speed and turn limits from a log's provenance (defaults where absent or invalid)."""
+    base = DriveParams()
+    try:
+        v = float(metadata.get("v_max_mps", base.v_max_mps))
+        w = float(metadata.get("omega_max_rps", base.omega_max_rps))
+    except ValueError:
+        return base
+    if not (math.isfinite(v) and math.isfinite(w) and v > 0 and w > 0):
+        return base
+    return replace(base, v_max_mps=v, omega_max_rps=w)
 
 
 def _lfd_messages(
