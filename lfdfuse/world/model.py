@@ -243,7 +243,7 @@ DEFAULT_WORLD = "building"
 
 
 def load_world(name_or_path: str | None) -> World:
-    """Load a built-in world by name, or a YAML file by path."""
+    """Load a built-in world by name, or a world YAML or a map_server map YAML by path."""
     spec = name_or_path or DEFAULT_WORLD
     if spec in builtin_names():
         text = (resources.files("lfdfuse") / "world" / "builtin" / f"{spec}.yaml").read_text()
@@ -258,6 +258,8 @@ def load_world(name_or_path: str | None) -> World:
             text = path.read_text()
         except OSError as exc:
             raise WorldError(f"cannot read world file {spec}: {exc.strerror}") from exc
+        except UnicodeDecodeError:
+            raise WorldError(f"{spec}: not a text file (give the map's YAML, not its image)") from None
         origin = str(path)
     try:
         data = yaml.safe_load(text)
@@ -265,6 +267,11 @@ def load_world(name_or_path: str | None) -> World:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""
         raise WorldError(f"{origin}: malformed YAML{where}") from exc
+    # imported here: occupancy builds on this module's World and parse_world
+    from lfdfuse.world import occupancy
+
+    if occupancy.is_map_yaml(data):
+        return occupancy.world_from_map(data, path=Path(origin))
     return parse_world(data, source=text, origin=origin)
 
 

@@ -1,18 +1,38 @@
-"""Vectorised ray–segment casting with a uniform-grid spatial index.
+"""Vectorised ray–segment casting over a spatial index that stays fast on thousands of walls.
 
-The map is a set of segments ``(S, 4)`` ``[ax, ay, bx, by]``. Each grid cell stores the
-segments that can be hit from anywhere inside it within ``max_range_m`` (distance from the
-cell to the segment ≤ max range), so a cast only tests a few dozen candidates even on maps of
-thousands of segments. Intersections are exact (parametric line solve in float64).
+The map is a set of segments ``(S, 4)`` ``[ax, ay, bx, by]``. A uniform grid of ``cell_m``
+cells lists, per cell, every segment that can be hit from anywhere inside it within
+``max_range_m``, sorted nearest first and cut into *bands* of growing size (32, 128, 512, …).
+
+A scan is cast band by band. Within a band, each segment's angular interval as seen from the
+origin selects the beams that can hit it (a conservative, slightly widened filter), and only
+those (beam, segment) pairs are solved exactly. A beam is finished once its nearest hit is no
+farther than the next band's lower-bound distance, so a scan in a dense map stops after the
+first band or two: its cost follows the walls near the robot, not the size of the map.
+
+Intersections are the same parametric line solve in float64 as :func:`intersect`, applied to a
+superset of the pairs that can hit, so results equal a brute-force cast over all segments.
+The index is built per segment (the cells within reach of its bounding box), so building costs
+segments × reach², never cells × segments.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 
 import numpy as np
 
 _EPS = 1e-12
+_TWO_PI = 2.0 * math.pi
+#: sizes of the candidate bands, nearest first; the last band takes all the rest
+_BANDS = (128, 512, 2048)
+#: cached per-cell band arrays, cleared when it grows past this many cells
+_CACHE_CELLS = 4096
+#: most (segment, cell) pairs examined at once while building the index
+_BUILD_CHUNK = 2_000_000
+#: most grid cells; a larger world gets larger cells
+_MAX_CELLS = 4_000_000
 
 
 def _point_segment_distance(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> np.ndarray:
@@ -25,6 +45,56 @@ def _point_segment_distance(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> 
     dx = ax + t * ex - px[:, None]
     dy = ay + t * ey - py[:, None]
     return np.sqrt(dx * dx + dy * dy)
+
+
+def _pair_distance(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> np.ndarray:
+    """Distances ``(N,)`` from points ``(N,)`` to segments ``(N, 4)``, pair by pair.
+
+    The same operations as :func:`_point_segment_distance`, so the same values.
+    """
+    ax, ay, bx, by = seg[:, 0], seg[:, 1], seg[:, 2], seg[:, 3]
+    ex, ey = bx - ax, by - ay
+    ll = ex * ex + ey * ey
+    t = np.clip(((px - ax) * ex + (py - ay) * ey) / np.where(ll > 0, ll, 1.0), 0.0, 1.0)
+    dx = ax + t * ex - px
+    dy = ay + t * ey - py
+    return np.sqrt(dx * dx + dy * dy)
+
+
+def near_pairs(
+    segments: np.ndarray, *, x0: float, y0: float, cell_m: float, nx: int, ny: int, reach_m: float
+) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """Every (segment, cell) pair of a grid whose cell centre is within ``reach_m`` of the segment.
+
+    The grid has ``nx × ny`` cells of ``cell_m`` from ``(x0, y0)``; cell ``(i, j)`` has its centre
+    at ``(x0 + (i + ½)·cell_m, y0 + (j + ½)·cell_m)``. Yields chunks ``(segment ids, i, j,
+    distance m)``, each ``(N,)``. Work grows with segments × (reach / cell)², not with cells ×
+    segments.
+    """
+    seg = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
+    n_seg = len(seg)
+    i0 = np.ceil((np.minimum(seg[:, 0], seg[:, 2]) - reach_m - x0) / cell_m - 0.5)
+    i1 = np.floor((np.maximum(seg[:, 0], seg[:, 2]) + reach_m - x0) / cell_m - 0.5)
+    j0 = np.ceil((np.minimum(seg[:, 1], seg[:, 3]) - reach_m - y0) / cell_m - 0.5)
+    j1 = np.floor((np.maximum(seg[:, 1], seg[:, 3]) + reach_m - y0) / cell_m - 0.5)
+    i0, i1 = np.clip(i0, 0, nx).astype(np.int64), np.clip(i1, -1, nx - 1).astype(np.int64)
+    j0, j1 = np.clip(j0, 0, ny).astype(np.int64), np.clip(j1, -1, ny - 1).astype(np.int64)
+    nj = np.maximum(j1 - j0 + 1, 0)
+    count = np.maximum(i1 - i0 + 1, 0) * nj
+    ends = np.cumsum(count)
+    start = 0
+    while start < n_seg:
+        done_before = int(ends[start - 1]) if start else 0
+        stop = max(start + 1, int(np.searchsorted(ends, done_before + _BUILD_CHUNK, "right")))
+        cnt = count[start:stop]
+        s = np.repeat(np.arange(start, stop), cnt)
+        local = np.arange(int(cnt.sum())) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+        ci = i0[s] + local // nj[s]
+        cj = j0[s] + local % nj[s]
+        d = _pair_distance(x0 + (ci + 0.5) * cell_m, y0 + (cj + 0.5) * cell_m, seg[s])
+        keep = d <= reach_m
+        yield s[keep], ci[keep], cj[keep], d[keep]
+        start = stop
 
 
 def intersect(ox: np.ndarray, oy: np.ndarray, dx: np.ndarray, dy: np.ndarray, seg: np.ndarray) -> np.ndarray:
@@ -46,15 +116,44 @@ def intersect(ox: np.ndarray, oy: np.ndarray, dx: np.ndarray, dy: np.ndarray, se
     hit = ~parallel & (t >= 0.0) & (u >= -1e-12) & (u <= 1.0 + 1e-12)
     out = np.where(hit, t, np.inf)
     if parallel.any():
-        # a beam along a wall: it hits the nearest point of the segment ahead of it
-        collinear = parallel & (np.abs(wx * dyc - wy * dxc) <= 1e-9)
-        if collinear.any():
-            ta = wx * dxc + wy * dyc
-            tb = (wx + ex) * dxc + (wy + ey) * dyc
-            inside = (ta <= 0.0) & (tb >= 0.0) | (tb <= 0.0) & (ta >= 0.0)
-            ahead = np.where(np.minimum(ta, tb) >= 0.0, np.minimum(ta, tb), np.inf)
-            out = np.where(collinear, np.where(inside, 0.0, ahead), out)
+        out = np.where(parallel, _collinear(wx, wy, ex, ey, dxc, dyc, out), out)
     return out
+
+
+def _collinear(
+    wx: np.ndarray,
+    wy: np.ndarray,
+    ex: np.ndarray,
+    ey: np.ndarray,
+    dx: np.ndarray,
+    dy: np.ndarray,
+    out: np.ndarray,
+) -> np.ndarray:
+    """For parallel ray/segment pairs: a beam along a wall hits the nearest point ahead of it."""
+    collinear = np.abs(wx * dy - wy * dx) <= 1e-9
+    ta = wx * dx + wy * dy
+    tb = (wx + ex) * dx + (wy + ey) * dy
+    inside = (ta <= 0.0) & (tb >= 0.0) | (tb <= 0.0) & (ta >= 0.0)
+    ahead = np.where(np.minimum(ta, tb) >= 0.0, np.minimum(ta, tb), np.inf)
+    return np.where(collinear, np.where(inside, 0.0, ahead), out)
+
+
+class _Band:
+    """The segments of one band of a cell, with what a cast needs precomputed."""
+
+    __slots__ = ("seg", "ex", "ey", "slack", "cut_m")
+
+    def __init__(self, seg: np.ndarray, cut_m: float) -> None:
+        self.seg = np.ascontiguousarray(seg)
+        self.ex, self.ey = seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]
+        length = np.hypot(self.ex, self.ey)
+        # Angular widening of the beam filter, divided by |cross| = h·length (h: distance from
+        # the origin to the segment's line). The exact test accepts 1e-12·length past each end
+        # and a collinear beam within 1e-9 m of an end: seen from the origin, under at most
+        # (1e-12·length + 1e-9) / h rad. Ten times that, and every beam when h is tiny.
+        self.slack = (1e-11 * length + 1e-8) * length + 1e-30
+        #: lower bound (m) of the distance from anywhere in the cell to any later band's segment
+        self.cut_m = cut_m
 
 
 class RayCaster:
@@ -66,6 +165,8 @@ class RayCaster:
     2.0
     >>> float(rc.cast(0.0, 0.0, np.array([np.pi]))[0])  # no return: the max range
     8.0
+    >>> RayCaster(np.zeros((0, 4))).cast(0.0, 0.0, np.array([0.0, 1.0])).tolist()  # no walls at all
+    [8.0, 8.0]
     """
 
     def __init__(self, segments: np.ndarray, *, max_range_m: float = 8.0, cell_m: float = 1.0) -> None:
@@ -83,58 +184,156 @@ class RayCaster:
         else:
             self.x0 = self.y0 = 0.0
             x1 = y1 = self.cell_m
+        # any cell size gives the same results; a huge world gets coarser cells, not huge memory
+        self.cell_m = max(self.cell_m, math.sqrt((x1 - self.x0) * (y1 - self.y0) / _MAX_CELLS))
         self.nx = max(1, math.ceil((x1 - self.x0) / self.cell_m))
         self.ny = max(1, math.ceil((y1 - self.y0) / self.cell_m))
         self._build_index()
+        self._all = [_Band(self.segments, math.inf)]
+        self._cache: dict[int, list[_Band]] = {}
 
     def _build_index(self) -> None:
-        """Per cell, the segments within max range + half diagonal of the cell centre."""
+        """Per cell, the segments within max range + half diagonal of its centre, nearest first.
+
+        Sets ``_index`` (segment ids, grouped by cell), ``_offsets`` ``(cells + 1,)`` and
+        ``_lower_um`` (per entry, a lower bound in whole micrometres of the distance from
+        anywhere in the cell to the segment, non-decreasing within a cell).
+        """
         half_diag = self.cell_m * math.sqrt(0.5)
         reach = self.max_range_m + half_diag
-        cx = self.x0 + (np.arange(self.nx) + 0.5) * self.cell_m
-        cy = self.y0 + (np.arange(self.ny) + 0.5) * self.cell_m
-        gx, gy = np.meshgrid(cx, cy, indexing="ij")
-        px, py = gx.ravel(), gy.ravel()
-        lists: list[np.ndarray] = []
-        chunk = max(1, 2_000_000 // max(1, len(self.segments)))
-        for i in range(0, len(px), chunk):
-            d = _point_segment_distance(px[i : i + chunk], py[i : i + chunk], self.segments)
-            lists.extend(np.nonzero(row <= reach)[0] for row in d)
-        self._offsets = np.zeros(len(lists) + 1, dtype=np.int64)
-        self._offsets[1:] = np.cumsum([len(x) for x in lists])
-        self._index = np.concatenate(lists).astype(np.int64) if lists else np.zeros(0, np.int64)
-        self._near_cache: dict[int, np.ndarray] = {}
+        keys: list[np.ndarray] = []
+        ids: list[np.ndarray] = []
+        # the sort key packs (cell, lower bound in whole micrometres, rounded down) into one int64
+        q_max = (1 << 32) - 1
+        for s, ci, cj, d in near_pairs(
+            self.segments, x0=self.x0, y0=self.y0, cell_m=self.cell_m, nx=self.nx, ny=self.ny, reach_m=reach
+        ):
+            lower = np.maximum(d - half_diag - 1e-9, 0.0)
+            q = np.minimum(np.floor(lower * 1e6), q_max).astype(np.int64)
+            keys.append(((ci * self.ny + cj) << 32) | q)
+            ids.append(s)
+        key = np.concatenate(keys) if keys else np.zeros(0, np.int64)
+        order = np.argsort(key, kind="stable")
+        key = key[order]
+        self._index = (np.concatenate(ids)[order] if ids else np.zeros(0, np.int64)).astype(np.int32)
+        self._lower_um = (key & q_max).astype(np.uint32)
+        cells = key >> 32
+        self._offsets = np.searchsorted(cells, np.arange(self.nx * self.ny + 1)).astype(np.int64)
 
-    def candidates(self, x: float, y: float) -> np.ndarray:
-        """Segments ``(K, 4)`` that a ray from ``(x, y)`` can hit within max range."""
+    def _bands(self, x: float, y: float) -> list[_Band]:
+        """The candidate bands of the cell holding ``(x, y)`` (all segments outside the grid)."""
         i = int((x - self.x0) // self.cell_m)
         j = int((y - self.y0) // self.cell_m)
         if not (0 <= i < self.nx and 0 <= j < self.ny):
-            return self.segments
+            return self._all
         c = i * self.ny + j
-        seg = self._near_cache.get(c)
-        if seg is None:
-            seg = self.segments[self._index[self._offsets[c] : self._offsets[c + 1]]]
-            self._near_cache[c] = seg
-        return seg
+        bands = self._cache.get(c)
+        if bands is None:
+            lo, hi = int(self._offsets[c]), int(self._offsets[c + 1])
+            bands = []
+            size_start = lo
+            for size in _BANDS:
+                end = min(hi, size_start + size) if size != _BANDS[-1] else hi
+                if end <= size_start:
+                    break
+                cut = float(self._lower_um[end]) * 1e-6 if end < hi else math.inf
+                bands.append(_Band(self.segments[self._index[size_start:end]], cut))
+                size_start = end
+            if len(self._cache) >= _CACHE_CELLS:
+                self._cache.clear()
+            self._cache[c] = bands
+        return bands
+
+    def candidates(self, x: float, y: float) -> np.ndarray:
+        """Segments ``(K, 4)`` that a ray from ``(x, y)`` can hit within max range."""
+        bands = self._bands(x, y)
+        if len(bands) == 1:
+            return bands[0].seg
+        return np.concatenate([b.seg for b in bands]) if bands else np.zeros((0, 4))
 
     def cast(self, x: float, y: float, angles_rad: np.ndarray) -> np.ndarray:
         """Ranges ``(B,)`` in metres along world-frame ``angles_rad`` ``(B,)``; no return = max range."""
-        seg = self.candidates(x, y)
-        angles = np.asarray(angles_rad, dtype=np.float64)
-        if len(seg) == 0:
-            return np.full(angles.shape, self.max_range_m)
-        n = angles.shape[0]
-        t = intersect(np.full(n, x), np.full(n, y), np.cos(angles), np.sin(angles), seg)
-        return np.minimum(t.min(axis=1), self.max_range_m)
+        angles = np.asarray(angles_rad, dtype=np.float64).reshape(-1)
+        best = np.full(angles.shape, np.inf)
+        if len(angles) == 0:
+            return best
+        dirs = np.column_stack([np.cos(angles), np.sin(angles)])
+        phi = np.mod(angles, _TWO_PI)
+        phi[phi >= _TWO_PI] = 0.0
+        active = np.argsort(phi)
+        for band in self._bands(x, y):
+            if len(band.seg):
+                self._cast_band(band, x, y, dirs, phi, active, best)
+            if band.cut_m == math.inf:
+                break
+            active = active[best[active] > band.cut_m]
+            if len(active) == 0:
+                break
+        return np.minimum(best, self.max_range_m, out=best)
+
+    @staticmethod
+    def _cast_band(
+        band: _Band,
+        x: float,
+        y: float,
+        dirs: np.ndarray,
+        phi: np.ndarray,
+        active: np.ndarray,
+        best: np.ndarray,
+    ) -> None:
+        """Lower ``best`` ``(B,)`` by the hits on a band of the beams ``active`` (sorted by ``phi``).
+
+        ``dirs`` ``(B, 2)`` are the beams' unit directions, ``phi`` ``(B,)`` their angles in [0, 2π).
+        """
+        w = band.seg - np.array([x, y, x, y])  # origin → a, origin → b
+        cross = w[:, 0] * band.ey - w[:, 1] * band.ex  # also the numerator of the hit distance
+        # the arc the segment covers seen from the origin: counter-clockwise from `first`
+        ends = np.arctan2(w[:, 1::2], w[:, 0::2])
+        first = np.where(cross >= 0.0, ends[:, 0], ends[:, 1])
+        width = np.mod(ends[:, 0] + ends[:, 1] - 2.0 * first, _TWO_PI)
+        delta = np.minimum(1e-7 + band.slack / (np.abs(cross) + 1e-300), 4.0)
+        first = np.mod(first - delta, _TWO_PI)
+        first[first >= _TWO_PI] = 0.0
+        # beams inside the arc: a run of the active beams sorted by angle, taken twice round
+        sphi = phi[active]
+        phi2 = np.concatenate([sphi, sphi + _TWO_PI])
+        lo = phi2.searchsorted(first, "left")
+        cnt = np.minimum(phi2.searchsorted(first + width + 2.0 * delta, "right") - lo, len(active))
+        total = int(cnt.sum())
+        if total == 0:
+            return
+        k = np.repeat(np.arange(len(cnt)), cnt)
+        beam = np.concatenate([active, active])[
+            np.arange(total) + np.repeat(lo - (np.cumsum(cnt) - cnt), cnt)
+        ]
+        # the exact solve of `intersect` on those pairs only: the same operations, the same values
+        d = dirs[beam]
+        dxc, dyc = d[:, 0], d[:, 1]
+        ex, ey = band.ex[k], band.ey[k]
+        wk = w[k]
+        wx, wy = wk[:, 0], wk[:, 1]
+        denom = dxc * ey - dyc * ex
+        parallel = np.abs(denom) <= _EPS
+        inv = 1.0 / np.where(parallel, 1.0, denom)
+        t = cross[k] * inv
+        u = (wx * dyc - wy * dxc) * inv
+        hit = ~parallel & (t >= 0.0) & (u >= -1e-12) & (u <= 1.0 + 1e-12)
+        out = np.where(hit, t, np.inf)
+        if parallel.any():
+            p = np.flatnonzero(parallel)
+            out[p] = _collinear(wx[p], wy[p], ex[p], ey[p], dxc[p], dyc[p], out[p])
+        np.minimum.at(best, beam, out)
 
     def clearance(self, x: float, y: float) -> float:
         """Distance (m) from a point to the nearest segment, or max range if none is nearer."""
-        seg = self.candidates(x, y)
-        if len(seg) == 0:
-            return self.max_range_m
-        d = _point_segment_distance(np.array([x]), np.array([y]), seg)
-        return float(min(d.min(), self.max_range_m))
+        best = math.inf
+        px, py = np.array([x]), np.array([y])
+        for band in self._bands(x, y):
+            if len(band.seg):
+                best = min(best, float(_point_segment_distance(px, py, band.seg).min()))
+            if best <= band.cut_m:
+                break
+        return min(best, self.max_range_m)
 
     def visible(self, x0: float, y0: float, x1: float, y1: float) -> bool:
         """True when the straight line between two points crosses no segment."""
@@ -142,6 +341,12 @@ class RayCaster:
         dist = math.hypot(dx, dy)
         if dist == 0.0:
             return True
-        seg = self.candidates(x0, y0) if dist <= self.max_range_m else self.segments
-        t = intersect(np.array([x0]), np.array([y0]), np.array([dx / dist]), np.array([dy / dist]), seg)
-        return bool(t.min(initial=np.inf) >= dist)
+        bands = self._bands(x0, y0) if dist <= self.max_range_m else self._all
+        ox, oy = np.array([x0]), np.array([y0])
+        ux, uy = np.array([dx / dist]), np.array([dy / dist])
+        for band in bands:
+            if len(band.seg) and intersect(ox, oy, ux, uy, band.seg).min() < dist:
+                return False
+            if band.cut_m >= dist:
+                break
+        return True
