@@ -1,0 +1,274 @@
+"""``lfdfuse teleop``: the terminal shell around :mod:`lfdfuse.sources.teleop`.
+
+This module owns everything that touches the terminal: raw key input (restored on every exit
+path), the live rich view, the Foxglove URL. The session, the key mapping and the server are
+library code and know nothing of terminals.
+"""
+
+from __future__ import annotations
+
+import os
+import select
+import sys
+import termios
+from collections import deque
+from collections.abc import Iterator
+from contextlib import contextmanager, nullcontext
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import typer
+from rich.console import Group
+from rich.live import Live
+from rich.panel import Panel
+from rich.text import Text
+
+from lfdfuse.cli.app import WORLD_HELP, app
+from lfdfuse.cli.common import console, user_errors
+from lfdfuse.cli.render import print_run
+from lfdfuse.errors import ConfigError
+from lfdfuse.sim.robot import Pose
+from lfdfuse.sim.sensors import ScanGeometry
+from lfdfuse.sources.teleop.inputs import Input
+from lfdfuse.sources.teleop.keys import HELP, KeyDecoder
+from lfdfuse.sources.teleop.script import ScriptInput, load_script
+from lfdfuse.sources.teleop.session import (
+    SimClock,
+    TeleopOptions,
+    TeleopSession,
+    make_session,
+    stop_on_signals,
+    teleop,
+)
+from lfdfuse.sources.teleop.view import ARROWS, LASER, TRAIL, WALL, render_map
+from lfdfuse.world.model import DEFAULT_WORLD, World, load_world
+
+INPUTS = ("keyboard", "foxglove", "script")
+LAYOUT = "foxglove/teleop-layout.json"
+
+
+@app.command("teleop")
+@user_errors
+def teleop_cmd(
+    world: str = typer.Option(DEFAULT_WORLD, "--world", "-w", help=WORLD_HELP),
+    input_: str = typer.Option(
+        "keyboard",
+        "--input",
+        "-i",
+        help="keyboard (this terminal), foxglove (a Foxglove client's Teleop panel), or script (--script).",
+    ),
+    port: int = typer.Option(8765, "--port", help="Foxglove WebSocket port (0: any free port)."),
+    host: str = typer.Option(
+        "127.0.0.1", "--host", help="Foxglove server address (0.0.0.0: all interfaces)."
+    ),
+    script: Path | None = typer.Option(
+        None, "--script", help="Timed inputs (YAML or CSV) for --input script; runs faster than real time."
+    ),
+    duration: float | None = typer.Option(
+        None, "--duration", "-d", help="Stop after this many seconds of wall-clock time (default: no limit)."
+    ),
+    timeout: float = typer.Option(
+        2.5, "--timeout", help="Foxglove: stop the robot when no client command came for this many seconds."
+    ),
+    seed: int = typer.Option(0, "--seed", help="Seed of every random draw (sensor noise)."),
+    start: str | None = typer.Option(
+        None, "--start", help="Start pose X,Y,THETA (m, m, rad); default: the world's."
+    ),
+    out: Path = typer.Option(Path("demo.mcap"), "--out", "-o", help="Output MCAP file."),
+) -> None:
+    """Drive the simulated robot yourself and record the run as a demonstration.
+
+    Keyboard (default): keys as in ROS teleop_twist_keyboard — i forward, , back, j/l turn,
+    u/o forward arcs, m/. back arcs, k or space stop, arrows too, q/z speed ±10%. A command
+    holds until the next key. Esc or Ctrl-C ends the run and saves it.
+
+    Foxglove: open the printed URL, load the layout lfdfuse/foxglove/teleop-layout.json and
+    drive with its Teleop panel (it publishes geometry_msgs/Twist on /cmd_vel). Ctrl-C ends.
+
+    The demo has the channels of `simulate` plus /teleop/input, provenance teacher: human;
+    `segment`, `estimate` and `execute` take it unchanged. It is written when the run ends
+    (key, --duration, SIGINT, SIGTERM), atomically; ending a run is not an error (exit 0).
+
+    Examples:
+      lfdfuse teleop --world building -o mine.mcap
+      lfdfuse teleop --input foxglove --port 8765 --duration 600 -o mine.mcap
+      lfdfuse teleop --input script --script drive.yaml -o scripted.mcap
+    """
+    if input_ not in INPUTS:
+        raise ConfigError(f"--input must be one of {', '.join(INPUTS)}, got {input_!r}")
+    if (input_ == "script") != (script is not None):
+        raise ConfigError("--script FILE goes with --input script (and only with it)")
+    if not 0 <= port <= 65535:
+        raise ConfigError(f"--port must be 0..65535, got {port}")
+    if not timeout > 0:
+        raise ConfigError("--timeout must be positive")
+    w = load_world(world)
+    pose = Pose.parse(start) if start else None
+    opts = TeleopOptions(
+        world=w,
+        input_name=input_ if script is None else f"script:{script.name}",
+        seed=seed,
+        start=pose,
+        duration_s=duration,
+        twist_timeout_s=timeout if input_ == "foxglove" else None,
+    )
+    laser = opts.sensors.laser.geometry
+    if input_ == "script":
+        assert script is not None
+        session = make_session(opts, inputs=[ScriptInput(load_script(script))], clock=SimClock())
+        with stop_on_signals(session):
+            summary = teleop(opts, session=session, out=out)
+    elif input_ == "foxglove":
+        from lfdfuse.sources.teleop.foxglove_server import FoxgloveLive
+
+        with FoxgloveLive(world=w, sensors=opts.sensors, host=host, port=port) as live:
+            console.print(f"Foxglove server at [bold]{live.url}[/bold]", soft_wrap=True)
+            console.print(f"  open {live.app_url()}", soft_wrap=True, markup=False)
+            console.print(
+                f"  or in Foxglove: Open connection → Foxglove WebSocket → {live.url}", soft_wrap=True
+            )
+            console.print(
+                f"  layout: Layouts → Import from file… → {layout_path()}", soft_wrap=True, markup=False
+            )
+            session = make_session(opts, inputs=[live])
+            with stop_on_signals(session), live_view(session, w, laser, status=lambda: _clients(live)):
+                summary = teleop(opts, session=session, out=out, sinks=[live])
+            console.print(f"  published {live.published} live messages")
+    else:
+        if not sys.stdin.isatty():
+            raise ConfigError(
+                "--input keyboard needs a terminal on stdin; use --input foxglove or --input script"
+            )
+        fd = sys.stdin.fileno()
+        keys = TerminalKeys(fd)
+        session = make_session(opts, inputs=[keys])
+        with stop_on_signals(session), raw_input_mode(fd), live_view(session, w, laser, help_text=HELP):
+            summary = teleop(opts, session=session, out=out)
+    print_run(summary.run, title=f"teleop {w.name} / {opts.input_name}")
+    console.print(f"  ended      {summary.ended} ({summary.inputs} inputs)")
+    console.print(f"next: lfdfuse segment {out}")
+
+
+def layout_path() -> Path:
+    """Where the shipped Foxglove layout is on this machine."""
+    return Path(str(resources.files("lfdfuse") / LAYOUT))
+
+
+def _clients(live: Any) -> str:
+    n = live.clients
+    return f"{n} client{'s' if n != 1 else ''} connected at {live.url}"
+
+
+class TerminalKeys:
+    """An input source reading the keys typed since the last period from a raw-mode terminal."""
+
+    def __init__(self, fd: int) -> None:
+        self.fd = fd
+        self.decoder = KeyDecoder()
+        self.closed = False
+
+    def poll(self, t_s: float) -> list[Input]:
+        keys: list[str] = []
+        got = False
+        while not self.closed and select.select([self.fd], [], [], 0)[0]:
+            data = os.read(self.fd, 1024)
+            if not data:
+                self.closed = True
+                return [Input("end", "terminal closed", "keyboard")]
+            got = True
+            keys += self.decoder.feed(data)
+        if not got:
+            keys += self.decoder.flush()  # quiet for a period: a lone ESC is the Esc key
+        return [Input("key", k, "keyboard") for k in keys]
+
+
+@contextmanager
+def raw_input_mode(fd: int) -> Iterator[None]:
+    """Keys arrive one by one, unechoed, Ctrl-C as a byte; output stays cooked (rich draws as
+    usual). The old settings come back in ``finally``: on return, exception, or signal."""
+    saved = termios.tcgetattr(fd)
+    mode = termios.tcgetattr(fd)
+    mode[0] &= ~(termios.BRKINT | termios.ICRNL | termios.INPCK | termios.ISTRIP | termios.IXON)
+    mode[3] &= ~(termios.ECHO | termios.ICANON | termios.IEXTEN | termios.ISIG)
+    mode[6][termios.VMIN] = 1
+    mode[6][termios.VTIME] = 0
+    termios.tcsetattr(fd, termios.TCSADRAIN, mode)
+    try:
+        yield
+    finally:
+        termios.tcsetattr(fd, termios.TCSADRAIN, saved)
+
+
+def live_view(
+    session: TeleopSession,
+    world: World,
+    laser: ScanGeometry,
+    *,
+    help_text: str = "",
+    status: Any = None,
+) -> Any:
+    """A rich Live view refreshed 10 times a second, or nothing when stdout is not a terminal."""
+    if not console.is_terminal:
+        return nullcontext()
+    trail: deque[tuple[float, float]] = deque(maxlen=2000)
+    colors = {t.name[:1].upper(): _color(t.color) for t in world.targets}
+
+    def render() -> Any:
+        snap = session.snapshot
+        width, height = console.size
+        if snap is None:
+            return Text("starting…")
+        if not trail or trail[-1] != (snap.pose.x, snap.pose.y):
+            trail.append((snap.pose.x, snap.pose.y))
+        extra = help_text.count("\n") + 1 if help_text else 1
+        rows = max(6, height - 5 - extra)
+        lines = render_map(
+            world, snap.pose, snap.ranges_m, laser, cols=max(20, width - 2), rows=rows, trail=np.array(trail)
+        )
+        grid = Text("\n".join(lines))
+        _style(grid, lines, colors)
+        v, w = snap.command
+        goals = ", ".join(f"{n} at {t:.1f} s" for n, t in snap.reached) or "none yet"
+        info = Text.assemble(
+            (f"t {snap.wall_s:6.1f} s", "bold"),
+            f"   v {v:+.2f} m/s  ω {w:+.2f} rad/s",
+            f"   speed {snap.keys.speed_mps:.2f} m/s  turn {snap.keys.turn_rps:.2f} rad/s"
+            if help_text
+            else "",
+            f"   collisions {snap.collisions}",
+            "\n",
+            ("goals ", "bold"),
+            goals,
+            f"   last input: {snap.last_input or '-'}",
+            f"   {status()}" if status else "",
+        )
+        parts: list[Any] = [Panel(grid, padding=0, title=f"lfdfuse teleop — {world.name}"), info]
+        if help_text:
+            parts.append(Text(help_text, style="dim"))
+        return Group(*parts)
+
+    return Live(console=console, get_renderable=render, refresh_per_second=10, transient=False)
+
+
+def _style(text: Text, lines: list[str], colors: dict[str, str]) -> None:
+    """Colour walls, laser, trail, targets and robot: one span per run of equal characters."""
+    styles = {WALL: "grey50", LASER: "red", TRAIL: "cyan", **{a: "bold yellow" for a in ARROWS}, **colors}
+    offset = 0
+    for line in lines:
+        j = 0
+        while j < len(line):
+            k = j + 1
+            while k < len(line) and line[k] == line[j]:
+                k += 1
+            style = styles.get(line[j])
+            if style:
+                text.stylize(style, offset + j, offset + k)
+            j = k
+        offset += len(line) + 1
+
+
+def _color(rgb: tuple[float, float, float]) -> str:
+    r, g, b = (int(round(255 * c)) for c in rgb)
+    return f"bold #{r:02x}{g:02x}{b:02x}"

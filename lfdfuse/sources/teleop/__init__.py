@@ -1,0 +1,7 @@
+"""``teleop``: a person drives the simulated robot in real time (DESIGN §10).
+
+:mod:`.keys` maps terminal keys to commands, :mod:`.inputs` holds what a person did and its
+``/teleop/input`` message, :mod:`.script` replays timed inputs from a file,
+:mod:`.foxglove_server` is the live Foxglove WebSocket side, :mod:`.session` the real-time
+command source and the recorded run.
+"""
