@@ -11,8 +11,9 @@ from lfdfuse.cli.app import app
 from lfdfuse.cli.common import console, progress_bar, user_errors
 from lfdfuse.cli.render import print_table
 from lfdfuse.errors import ConfigError
-from lfdfuse.estimate.pf import PFParams
+from lfdfuse.estimate.paper import PFParams
 from lfdfuse.estimate.pipeline import METHODS, EstimateOptions, estimate_file
+from lfdfuse.estimate.smc import SMCParams
 
 
 @app.command("estimate")
@@ -23,17 +24,21 @@ def estimate_cmd(
         "pf",
         "--method",
         "-m",
-        help="pf (particle filter), nnls (least squares) or arbitration (best single behaviour).",
+        help="pf (exact posterior: Dirichlet prior, von Mises heading noise, tempered SMC), paper (the "
+        "paper's particle filter as published), nnls (least squares) or arbitration (best single behaviour).",
     ),
-    particles: int = typer.Option(PFParams().particles, "--particles", help="Particles per filter (pf)."),
+    particles: int = typer.Option(
+        SMCParams().particles, "--particles", help="Particles per row and trial (pf, paper)."
+    ),
     trials: int = typer.Option(
         1,
         "--trials",
         "-k",
-        help="Independent filters (pf) or bootstrap fits (nnls, arbitration); mean and std are reported.",
+        help="Independent samplers (pf, paper; one vectorised pass) or bootstrap fits (nnls, arbitration); "
+        "their spread is reported as trial_std.",
     ),
     likelihood: str = typer.Option(
-        "vonmises", "--likelihood", help="pf likelihood: vonmises (default) or paper (2 - D/2)."
+        "paper", "--likelihood", help="paper filter's likelihood: paper (2 - D/2, as published) or vonmises."
     ),
     seed: int = typer.Option(0, "--seed", help="Seed of the filters' random draws."),
     out: Path = typer.Option(Path("fusion.yaml"), "--out", "-o", help="Output fusion table (YAML)."),
@@ -52,7 +57,8 @@ def estimate_cmd(
     if likelihood not in ("vonmises", "paper"):
         raise ConfigError(f"unknown likelihood {likelihood!r} (valid: vonmises, paper)")
     pf = replace(PFParams(), particles=particles, likelihood=likelihood)  # type: ignore[arg-type]
-    opts = EstimateOptions(method=method, trials=trials, seed=seed, pf=pf)  # type: ignore[arg-type]
+    smc = replace(SMCParams(), particles=particles)
+    opts = EstimateOptions(method=method, trials=trials, seed=seed, pf=pf, smc=smc)  # type: ignore[arg-type]
     with progress_bar("estimate") as update:
         res = estimate_file(src, out=out, opts=opts, progress=update)
     console.print(

@@ -61,7 +61,8 @@ def print_table(table: FusionTable) -> None:
     """Weights (± std), samples and fit error per step and BAC, in percent to fit a terminal."""
     legend = ", ".join(f"{_abbrev(b)}={b}" for b in table.behaviors)
     console.print(
-        f"weights and std in % of the row; n = samples (* = too few to trust); fit° = mean heading error\n{legend}"
+        "weights and std in % of the row; n = samples (* = too few to trust); fit° = mean heading error;"
+        f" BAC? = not identifiable (the prior decides)\n{legend}"
     )
 
     def walk(net: Network, depth: int) -> None:
@@ -89,7 +90,7 @@ def print_table(table: FusionTable) -> None:
                         cells.append("")
                 n = f"{row.samples}" + ("*" if row.low_samples else "") if row.samples is not None else ""
                 fit = f"{row.fit_error_deg:.1f}" if row.fit_error_deg is not None else ""
-                t.add_row(str(row.bac), n, fit, *cells)
+                t.add_row(f"{row.bac}{'?' if row.identifiable is False else ''}", n, fit, *cells)
             if step.fusion:
                 console.print(t)
             else:

@@ -1,49 +1,28 @@
-"""Baselines beside the particle filter: non-negative least squares and arbitration."""
+"""Baselines beside the sampler: non-negative least squares, a least-squares heading fit on the
+simplex, and arbitration (the best single behaviour, the pre-fusion approach)."""
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.optimize import least_squares
+from scipy.optimize import nnls as _nnls
 
-
-def nnls(a: np.ndarray, b: np.ndarray, *, max_iter: int | None = None) -> np.ndarray:
-    """Solve ``min ‖A x − b‖`` subject to ``x ≥ 0`` (Lawson–Hanson active set).
-
-    ``a (R, n)``, ``b (R,)`` → ``x (n,)``.
-
-    >>> import numpy as np
-    >>> nnls(np.eye(2), np.array([1.0, -1.0])).tolist()
-    [1.0, 0.0]
-    """
-    r, n = a.shape
-    x = np.zeros(n)
-    passive = np.zeros(n, dtype=bool)
-    limit = max_iter if max_iter is not None else 3 * n + 10
-    tol = 1e-10 * max(1.0, float(np.abs(a).max(initial=0.0))) * max(r, n)
-    for _ in range(limit):
-        grad = a.T @ (b - a @ x)
-        cand = ~passive & (grad > tol)
-        if not cand.any():
-            break
-        passive[int(np.argmax(np.where(cand, grad, -np.inf)))] = True
-        while True:
-            z = np.zeros(n)
-            z[passive] = np.linalg.lstsq(a[:, passive], b, rcond=None)[0]
-            if (z[passive] > 0).all():
-                x = z
-                break
-            neg = passive & (z <= 0)
-            alpha = np.min(x[neg] / (x[neg] - z[neg]))
-            x = x + alpha * (z - x)
-            passive &= x > tol
-            x[~passive] = 0.0
-    return x
+from lfdfuse.estimate.model import row_data
 
 
 def nnls_weights(vectors: np.ndarray, demo: np.ndarray) -> np.ndarray:
-    """Weights ``(n,)`` with ``Σ sₖ vₖ ≈ V_r`` in least squares, ``s ≥ 0``: ``vectors (T, n, 2)``."""
+    """Weights ``(n,)`` with ``Σ sₖ vₖ ≈ V_r`` in least squares, ``s ≥ 0``: ``vectors (T, n, 2)``.
+
+    It fits the unit ``V_r`` with the fused vector's length too, so it is biased by the
+    behaviours' magnitudes.
+
+    >>> import numpy as np
+    >>> nnls_weights(np.array([[[1.0, 0.0], [0.0, 1.0]]]), np.array([[1.0, 0.0]])).round(6).tolist()
+    [1.0, 0.0]
+    """
     t, n, _ = vectors.shape
     a = vectors.transpose(0, 2, 1).reshape(2 * t, n)
-    return nnls(a, demo.reshape(2 * t))
+    return np.asarray(_nnls(a, demo.reshape(2 * t))[0])
 
 
 def angle_errors(vectors: np.ndarray, demo: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -51,7 +30,42 @@ def angle_errors(vectors: np.ndarray, demo: np.ndarray, weights: np.ndarray) -> 
     f = np.einsum("tnd,n->td", vectors, weights)
     zero = np.hypot(f[:, 0], f[:, 1]) <= 1e-12
     d = np.arctan2(f[:, 1], f[:, 0]) - np.arctan2(demo[:, 1], demo[:, 0])
-    return np.where(zero, np.pi, np.abs(np.arctan2(np.sin(d), np.cos(d))))
+    return np.asarray(np.where(zero, np.pi, np.abs(np.arctan2(np.sin(d), np.cos(d)))))
+
+
+def heading_fit_weights(vectors: np.ndarray, demo: np.ndarray) -> np.ndarray:
+    """Least-squares heading fit: ``w`` on the simplex minimising ``Σₜ Δₜ(w)²`` (radians).
+
+    Several starts (uniform, NNLS, each vertex); the best local optimum wins. A baseline for
+    round trips: where it lands close to the truth, the data pins the row.
+    """
+    t, n, _ = vectors.shape
+    if n == 1 or t == 0:
+        return np.full(n, 1.0 / n)
+    d = row_data(vectors, demo)
+
+    def res(x: np.ndarray) -> np.ndarray:
+        a, b = d.along @ x, d.across @ x
+        return np.append(np.arctan2(b, a), x.sum() - 1.0)
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        a, b = d.along @ x, d.across @ x
+        r2 = np.maximum(a * a + b * b, 1e-12)
+        j = (a[:, None] * d.across - b[:, None] * d.along) / r2[:, None]
+        return np.vstack([j, np.ones((1, n))])
+
+    starts = [np.full(n, 1.0 / n), *np.eye(n)]
+    nn = nnls_weights(vectors, demo)
+    if nn.sum() > 1e-9:
+        starts.append(nn / nn.sum())
+    best, cost = starts[0], np.inf
+    for x0 in starts:
+        x0 = np.clip(x0, 1e-6, None)
+        sol = least_squares(res, x0 / x0.sum(), jac=jac, bounds=(0.0, np.inf), method="trf")
+        if sol.cost < cost:
+            best, cost = sol.x, sol.cost
+    tot = best.sum()
+    return np.asarray(best / tot) if tot > 1e-12 else np.full(n, 1.0 / n)
 
 
 def arbitration_weights(vectors: np.ndarray, demo: np.ndarray) -> np.ndarray:

@@ -1,23 +1,75 @@
 """Round trips against a known fusion table: the quality check of estimation (DESIGN §6).
 
 A known table drives the network teacher; the demonstration is segmented and estimated; the
-learned table is compared with the truth per (step, BAC) and by its heading error on a held-out
-demonstration of the same teacher, against the error the true table itself has there (the noise
-floor).
+learned table is compared with the truth per (step, BAC) — beside a least-squares heading fit on
+the same steps and the Cramér–Rao bound — and by its heading error on a held-out demonstration
+of the same teacher, against the error the true table itself has there (the noise floor).
+Weights are those the runtime uses: the row's, else the step's default, else the table's.
 """
 
 from __future__ import annotations
 
+import math
+import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-from lfdfuse.estimate.baselines import angle_errors
-from lfdfuse.network.table import FusionTable, Step
-from lfdfuse.segment.read import SegmentedRun
+from lfdfuse.estimate.baselines import angle_errors, heading_fit_weights
+from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.network.table import FusionTable, Step, load_table
+from lfdfuse.segment.pipeline import segment_file
+from lfdfuse.segment.read import SegmentedRun, read_segmented
+from lfdfuse.world.model import load_world
+
+#: hand-written sparse truth tables, ``<world>-<style>.yaml``
+TRUTHS = Path(__file__).resolve().parent / "truths"
+#: heading noise of the network teacher in round trips
+TEACHER_NOISE_RAD = math.radians(5.0)
+
+
+def truth_names() -> list[str]:
+    """The shipped truth tables, by name (``tee-left``, …)."""
+    return sorted(p.stem for p in TRUTHS.glob("*.yaml"))
+
+
+def load_truth(name: str) -> tuple[FusionTable, str]:
+    """A shipped truth table and the world it is written for (the name's first part)."""
+    return load_table(TRUTHS / f"{name}.yaml"), name.split("-")[0]
+
+
+@dataclass(frozen=True)
+class Demo:
+    """A demonstration of a truth table, segmented; ``simulate_s`` is the wall time to drive it."""
+
+    run: SegmentedRun
+    simulate_s: float
+
+
+def demonstrate(
+    truth: FusionTable,
+    world: str,
+    *,
+    seed: int,
+    duration_s: float,
+    folder: Path,
+    noise_rad: float = TEACHER_NOISE_RAD,
+) -> Demo:
+    """Drive the network teacher with ``truth`` (``simulate --teacher``), segment with its behaviours."""
+    raw, seg = folder / f"{world}-{seed}.mcap", folder / f"{world}-{seed}.seg.mcap"
+    opts = ExecuteOptions(
+        world=load_world(world), table=truth, max_time_s=duration_s, seed=seed, heading_noise_rad=noise_rad
+    )
+    t0 = time.perf_counter()
+    drive_table(opts, out=raw, command="simulate", teacher=True)
+    elapsed = time.perf_counter() - t0
+    segment_file(raw, out=seg, behaviors=",".join(truth.behaviors))
+    return Demo(read_segmented(seg), elapsed)
 
 
 def leaf_steps(table: FusionTable) -> list[Step]:
+    """The fusion steps of a (nested) network, depth first: the order of the goal segments."""
     out: list[Step] = []
 
     def walk(steps: tuple[Step, ...]) -> None:
@@ -31,15 +83,80 @@ def leaf_steps(table: FusionTable) -> list[Step]:
     return out
 
 
-def effective_weights(table: FusionTable, step: Step, bac: int) -> np.ndarray:
-    """Weights ``(K,)`` over ``table.behaviors`` that the runtime uses in a BAC (row or default),
-    restricted to the applicable behaviours and normalised to sum 1."""
+def runtime_weights(table: FusionTable, step: Step, bac: int) -> dict[str, float]:
+    """The weights execute uses in a BAC: the row's, else the step's default, else the table's."""
     row = step.row(bac)
-    w = row.weights if row is not None else table.default_weights
-    names = table.behaviors
-    vec = np.array([w.get(n, 0.0) if bac >> i & 1 else 0.0 for i, n in enumerate(names)])
+    if row is not None:
+        return row.weights
+    return step.default_weights if step.default_weights is not None else table.default_weights
+
+
+def effective_weights(table: FusionTable, step: Step, bac: int) -> np.ndarray:
+    """Runtime weights ``(K,)`` over ``table.behaviors`` restricted to the applicable behaviours
+    and normalised to sum 1 (zeros when none of them carries weight)."""
+    w = runtime_weights(table, step, bac)
+    vec = np.array([w.get(n, 0.0) if bac >> i & 1 else 0.0 for i, n in enumerate(table.behaviors)])
     tot = vec.sum()
     return vec / tot if tot > 0 else vec
+
+
+@dataclass(frozen=True)
+class RowCompare:
+    """One learned row beside the truth: weights over the applicable behaviours ``names``."""
+
+    step: int
+    bac: int
+    samples: int
+    names: tuple[str, ...]
+    truth: np.ndarray
+    estimate: np.ndarray
+    fit: np.ndarray  # least-squares heading fit on the same steps
+    crb: float  # Cramér–Rao bound on the L1 error at the truth
+    identifiable: bool | None
+
+    @property
+    def l1(self) -> float:
+        return float(np.abs(self.estimate - self.truth).sum())
+
+    @property
+    def fit_l1(self) -> float:
+        return float(np.abs(self.fit - self.truth).sum())
+
+
+def compare_rows(
+    truth: FusionTable, learned: FusionTable, run: SegmentedRun, *, noise_rad: float, min_samples: int = 1
+) -> list[RowCompare]:
+    """Every learned row with ``min_samples`` steps of ``run`` (the training demo) beside the truth."""
+    if truth.behaviors != learned.behaviors or run.names != truth.behaviors:
+        raise ValueError("tables and run over different behaviour sets")
+    out = []
+    for i, (ts, ls) in enumerate(zip(leaf_steps(truth), leaf_steps(learned), strict=False)):
+        seg = run.segments[i] if i < len(run.segments) else None
+        if seg is None:
+            break
+        sl = np.arange(seg.start, seg.stop)
+        for row in ls.fusion:
+            steps = sl[(run.bac[sl] == row.bac) & run.informative[sl]]
+            if len(steps) < min_samples:
+                continue
+            idx = [j for j in range(len(truth.behaviors)) if row.bac >> j & 1]
+            vec, demo = run.vectors[steps][:, idx, :], run.demo[steps]
+            tw = effective_weights(truth, ts, row.bac)[idx]
+            lw = effective_weights(learned, ls, row.bac)[idx]
+            out.append(
+                RowCompare(
+                    i,
+                    row.bac,
+                    len(steps),
+                    tuple(truth.behaviors[j] for j in idx),
+                    tw,
+                    lw,
+                    heading_fit_weights(vec, demo),
+                    crb_l1(vec, tw, noise_rad),
+                    row.identifiable,
+                )
+            )
+    return out
 
 
 @dataclass(frozen=True)
@@ -54,9 +171,8 @@ def weight_errors(truth: FusionTable, learned: FusionTable, *, min_samples: int 
     """L1 between learned rows and the true effective weights, for rows with enough samples."""
     if truth.behaviors != learned.behaviors:
         raise ValueError("tables over different behaviour sets")
-    t_steps, l_steps = leaf_steps(truth), leaf_steps(learned)
     out = []
-    for i, (ts, ls) in enumerate(zip(t_steps, l_steps, strict=False)):
+    for i, (ts, ls) in enumerate(zip(leaf_steps(truth), leaf_steps(learned), strict=False)):
         for row in ls.fusion:
             if (row.samples or 0) < min_samples:
                 continue
@@ -67,19 +183,36 @@ def weight_errors(truth: FusionTable, learned: FusionTable, *, min_samples: int 
 
 
 def heading_errors(table: FusionTable, run: SegmentedRun) -> np.ndarray:
-    """Per informative step of a segmented run: the table's fused heading error (rad)."""
+    """Per informative step of a segmented run: the table's fused heading error (rad).
+
+    Fused as the runtime fuses: every behaviour named by the weights in use, and the fallback
+    weights where a row's fused vector is zero.
+    """
     steps = leaf_steps(table)
+    names = table.behaviors
+    pos = [run.names.index(n) for n in names]
     errs = []
     for seg in run.segments:
         if seg.index >= len(steps):
             break
         step = steps[seg.index]
-        for t in range(seg.start, seg.stop):
-            if not run.informative[t]:
-                continue
-            w = effective_weights(table, step, int(run.bac[t]))
-            errs.append(angle_errors(run.vectors[t : t + 1], run.demo[t : t + 1], w)[0])
-    return np.array(errs)
+        fallback = step.default_weights if step.default_weights is not None else table.default_weights
+        t = np.arange(seg.start, seg.stop)[run.informative[seg.start : seg.stop]]
+        if len(t) == 0:
+            continue
+        bacs = run.bac[t]
+        w = np.zeros((len(t), len(names)))
+        for bac in np.unique(bacs):
+            rw = runtime_weights(table, step, int(bac))
+            w[bacs == bac] = [rw.get(n, 0.0) for n in names]
+        vec = run.vectors[t][:, pos, :]
+        fused = np.einsum("tkd,tk->td", vec, w)
+        zero = np.hypot(fused[:, 0], fused[:, 1]) <= 1e-9
+        if zero.any():
+            fb = np.array([fallback.get(n, 0.0) for n in names])
+            fused[zero] = np.einsum("tkd,k->td", vec[zero], fb)
+        errs.append(angle_errors(fused[:, None, :], run.demo[t], np.ones(1)))
+    return np.concatenate(errs) if errs else np.zeros(0)
 
 
 def crb_l1(vectors: np.ndarray, weights: np.ndarray, noise_rad: float) -> float:
@@ -91,14 +224,14 @@ def crb_l1(vectors: np.ndarray, weights: np.ndarray, noise_rad: float) -> float:
     deviations — about the expected L1 error of any unbiased estimator; ``inf`` when a direction
     is not identifiable at all.
     """
+    n = len(weights)
+    if n < 2:
+        return 0.0
     f = np.einsum("tnd,n->td", vectors, weights)
     fn2 = f[:, 0] ** 2 + f[:, 1] ** 2
     jac = (f[:, None, 0] * vectors[:, :, 1] - f[:, None, 1] * vectors[:, :, 0]) / np.maximum(fn2, 1e-12)[
         :, None
     ]
-    n = len(weights)
-    if n < 2:
-        return 0.0
     basis = np.linalg.svd(np.ones((1, n)))[2][1:].T  # (n, n−1): directions that keep the sum
     fisher = basis.T @ (jac.T @ jac) @ basis / noise_rad**2
     try:

@@ -16,13 +16,19 @@ import yaml
 from lfdfuse.behaviors.primitives import ATTRACT, BASE_BEHAVIORS
 from lfdfuse.errors import ConfigError
 from lfdfuse.files import read_yaml, write_text_atomic
+from lfdfuse.network.landmarks import Landmark
 
 FORMAT = "lfdfuse/fusion-table@1"
 
 
 @dataclass(frozen=True)
 class FusionRow:
-    """Weights for one BAC of one step (``std``, ``samples``, ``fit_error_deg`` from estimate)."""
+    """Weights for one BAC of one step; the rest says what the data supports (from estimate).
+
+    ``std``: posterior standard deviation per weight; ``trial_std``: spread over ``--trials K``
+    (sampler noise); ``samples``: informative steps pooled; ``identifiable``: False when the data
+    cannot pin these weights and the prior decides (None: not assessed, e.g. a hand-written row).
+    """
 
     bac: int
     weights: dict[str, float]
@@ -30,6 +36,8 @@ class FusionRow:
     samples: int | None = None
     fit_error_deg: float | None = None
     low_samples: bool = False
+    trial_std: dict[str, float] | None = None
+    identifiable: bool | None = None
 
 
 @dataclass(frozen=True)
@@ -42,6 +50,9 @@ class Step:
     network: Network | None = None
     #: this step's weights for BACs it never saw (an extension; else the table's default_weights)
     default_weights: dict[str, float] | None = None
+    #: a sub-goal recognised from the robot's own sensors (an extension, issue 15): the step is
+    #: achieved when it is met; such a step has no target goal
+    landmark: Landmark | None = None
 
     def row(self, bac: int) -> FusionRow | None:
         for r in self.fusion:
@@ -143,7 +154,11 @@ def _weights(
 
 
 def _row(d: Any, behaviors: tuple[str, ...], where: str) -> FusionRow:
-    d = _keys(d, {"bac", "weights", "std", "samples", "fit_error_deg", "low_samples"}, where)
+    d = _keys(
+        d,
+        {"bac", "weights", "std", "trial_std", "samples", "identifiable", "fit_error_deg", "low_samples"},
+        where,
+    )
     bac = _req(d, "bac", where)
     if isinstance(bac, bool) or not isinstance(bac, int) or bac < 0 or bac >= 1 << len(behaviors):
         raise ConfigError(f"fusion table: {where}.bac must be an integer in [0, 2^{len(behaviors)})")
@@ -154,12 +169,25 @@ def _row(d: Any, behaviors: tuple[str, ...], where: str) -> FusionRow:
                 f"fusion table: {where}.weights.{name}: behaviour is not applicable in BAC {bac}"
             )
     std = None if d.get("std") is None else _weights(d["std"], behaviors, f"{where}.std", allow_zero_sum=True)
+    tstd = d.get("trial_std")
+    if tstd is not None:
+        tstd = _weights(tstd, behaviors, f"{where}.trial_std", allow_zero_sum=True)
+    ident = d.get("identifiable")
+    if ident is not None and not isinstance(ident, bool):
+        raise ConfigError(f"fusion table: {where}.identifiable must be true or false")
     samples = d.get("samples")
     if samples is not None and (isinstance(samples, bool) or not isinstance(samples, int) or samples < 0):
         raise ConfigError(f"fusion table: {where}.samples must be a non-negative integer")
     fit = d.get("fit_error_deg")
     return FusionRow(
-        bac, weights, std, samples, None if fit is None else float(fit), bool(d.get("low_samples", False))
+        bac,
+        weights,
+        std,
+        samples,
+        None if fit is None else float(fit),
+        bool(d.get("low_samples", False)),
+        tstd,
+        ident,
     )
 
 
@@ -171,7 +199,7 @@ def _network(d: Any, behaviors: tuple[str, ...], where: str) -> Network:
     steps = []
     for i, s in enumerate(steps_raw):
         sw = f"{where}.steps[{i}]"
-        s = _keys(s, {"name", "goal", "fusion", "network", "default_weights"}, sw)
+        s = _keys(s, {"name", "goal", "fusion", "network", "default_weights", "landmark"}, sw)
         goal = s.get("goal")
         if goal is not None:
             goal = _keys(goal, {"target"}, f"{sw}.goal")
@@ -192,7 +220,11 @@ def _network(d: Any, behaviors: tuple[str, ...], where: str) -> Network:
                 raise ConfigError(f"fusion table: {sw}.fusion names a BAC twice")
             sd = s.get("default_weights")
             sdw = None if sd is None else _weights(sd, behaviors, f"{sw}.default_weights")
-            steps.append(Step(str(_req(s, "name", sw)), goal, rows, None, sdw))
+            lm = s.get("landmark")
+            lmk = None if lm is None else Landmark.from_dict(lm, f"{sw}.landmark")
+            if lmk is not None and goal is not None:
+                raise ConfigError(f"fusion table: {sw}: a step has a goal or a landmark, not both")
+            steps.append(Step(str(_req(s, "name", sw)), goal, rows, None, sdw, lmk))
     return Network(str(d.get("name", "network")), tuple(steps))
 
 
@@ -233,8 +265,12 @@ def _row_dict(r: FusionRow) -> dict[str, Any]:
     d: dict[str, Any] = {"bac": r.bac, "weights": {k: _r(v) for k, v in r.weights.items()}}
     if r.std is not None:
         d["std"] = {k: _r(v) for k, v in r.std.items()}
+    if r.trial_std is not None:
+        d["trial_std"] = {k: _r(v) for k, v in r.trial_std.items()}
     if r.samples is not None:
         d["samples"] = r.samples
+    if r.identifiable is not None:
+        d["identifiable"] = r.identifiable
     if r.fit_error_deg is not None:
         d["fit_error_deg"] = round(r.fit_error_deg, 2)
     if r.low_samples:
@@ -249,6 +285,8 @@ def _net_dict(n: Network) -> dict[str, Any]:
         if s.network is not None:
             d["network"] = _net_dict(s.network)
         else:
+            if s.landmark is not None:
+                d["landmark"] = s.landmark.to_dict()
             if s.default_weights is not None:
                 d["default_weights"] = {k: _r(v) for k, v in s.default_weights.items()}
             d["fusion"] = [_row_dict(r) for r in s.fusion]

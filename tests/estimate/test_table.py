@@ -16,7 +16,8 @@ from lfdfuse.cli.main import app
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_file, estimate_run
 from lfdfuse.network.table import dump_table, load_table, parse_table
-from lfdfuse.segment.pipeline import read_segmented, segment_file
+from lfdfuse.segment.pipeline import segment_file
+from lfdfuse.segment.read import read_segmented
 from tests.conftest import ROOT
 
 runner = CliRunner()
@@ -65,6 +66,36 @@ def test_round_trip_and_schema() -> None:
     assert t.targets() == ["red"]
 
 
+def test_what_the_data_supports_round_trips_and_old_rows_still_load() -> None:
+    data = json.loads(json.dumps(TABLE))
+    row = data["network"]["steps"][0]["fusion"][0]
+    t_old = parse_table(data)  # a row without std, trial_std, samples, identifiable
+    assert t_old.network.steps[0].fusion[0].identifiable is None
+    assert t_old.network.steps[0].fusion[0].trial_std is None
+    assert "identifiable" not in dump_table(t_old) and "trial_std" not in dump_table(t_old)
+    row |= {
+        "std": {"avoid": 0.01, "wander_left": 0.02, "wander_right": 0.03},
+        "trial_std": {"avoid": 0.001, "wander_left": 0.002, "wander_right": 0.003},
+        "samples": 412,
+        "identifiable": False,
+    }
+    t = parse_table(data)
+    r = t.network.steps[0].fusion[0]
+    assert r.identifiable is False and r.trial_std == {
+        "avoid": 0.001,
+        "wander_left": 0.002,
+        "wander_right": 0.003,
+    }
+    text = dump_table(t)
+    assert parse_table(yaml.safe_load(text)) == t
+    jsonschema.validate(yaml.safe_load(text), SCHEMA)
+
+
+def test_both_copies_of_the_schema_are_identical() -> None:
+    packaged = ROOT / "lfdfuse" / "schemas" / "fusion-table.schema.json"
+    assert json.loads(packaged.read_text()) == SCHEMA
+
+
 @pytest.mark.parametrize(
     ("path", "value", "message"),
     [
@@ -77,6 +108,8 @@ def test_round_trip_and_schema() -> None:
         (["format"], "other@2", "format must be"),
         (["network", "steps", 0, "speed"], 1, "unknown field 'speed'"),
         (["network", "steps", 0, "default_weights", "avoid"], -1.0, "negative weight"),
+        (["network", "steps", 0, "fusion", 0, "identifiable"], "yes", "identifiable must be true or false"),
+        (["network", "steps", 0, "fusion", 0, "trial_std"], {"avoid": -0.1}, "negative weight"),
     ],
 )
 def test_invalid_tables_are_rejected(path: list[object], value: object, message: str) -> None:
@@ -92,7 +125,7 @@ def segmented(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return out
 
 
-@pytest.mark.parametrize("method", ["pf", "nnls", "arbitration"])
+@pytest.mark.parametrize("method", ["pf", "paper", "nnls", "arbitration"])
 def test_estimate_on_the_sample_demo(segmented: Path, tmp_path: Path, method: str) -> None:
     res = estimate_file(segmented, out=tmp_path / "f.yaml", opts=EstimateOptions(method=method, trials=2))  # type: ignore[arg-type]
     loaded = load_table(tmp_path / "f.yaml")
@@ -106,6 +139,8 @@ def test_estimate_on_the_sample_demo(segmented: Path, tmp_path: Path, method: st
             assert row.fit_error_deg is not None and np.isfinite(row.fit_error_deg)
             assert sum(row.weights.values()) == pytest.approx(1.0, abs=1e-3)
             assert row.low_samples == (row.samples is not None and row.samples < 30)
+            assert row.trial_std is not None and set(row.trial_std) == set(row.weights)
+            assert (row.identifiable is not None) == (method == "pf")
 
 
 def test_styles_show_in_the_learned_weights(segmented: Path) -> None:

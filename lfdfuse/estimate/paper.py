@@ -1,4 +1,9 @@
-"""The particle filter over fusion weights (paper equations 1–8), vectorised over trials.
+"""The paper's particle filter over fusion weights (equations 1–8), vectorised over trials.
+
+``--method paper``: kept as published, to reproduce the paper's figures. It is not the exact
+posterior of any model — the random walk forgets data, clipping to ``[0, 1]^n`` acts as a hidden
+prior, and short groups are replayed — which is why ``--method pf`` (:mod:`lfdfuse.estimate.smc`)
+is the default.
 
 State: ``K`` independent filters (trials) of ``M`` particles, each a weight vector in
 ``[0, 1]^n`` over the applicable behaviours. One step, given the behaviour vectors ``v (n, 2)``
@@ -13,9 +18,9 @@ and the demonstrated unit vector ``V_r (2,)`` of one timestep:
 Within a BAC the true weights are constant, so the random walk only keeps the cloud alive: its
 standard deviation shrinks as ``σ₀ / sqrt(1 + t / τ)`` down to ``σ_min``. Two likelihoods:
 
-* ``paper``: ``2 − D/2`` with ``D = |V_r − V̂|`` (eq. 7) — at most a factor 2 between the best and
-  the worst particle, so each step carries little evidence;
-* ``vonmises`` (default): ``exp(κ (cos Δθ − 1))``, ``κ = 1 / σ_h²`` for an assumed heading noise
+* ``paper`` (default, as published): ``2 − D/2`` with ``D = |V_r − V̂|`` (eq. 7) — at most a
+  factor 2 between the best and the worst particle, so each step carries little evidence;
+* ``vonmises`` (the previous default of this project, kept for comparison): ``exp(κ (cos Δθ − 1))``, ``κ = 1 / σ_h²`` for an assumed heading noise
   ``σ_h`` — a Gaussian in the heading error for small errors.
 
 Weights are multiplied across steps (log-domain) and reset to uniform after resampling, which is
@@ -30,6 +35,8 @@ from typing import Literal
 
 import numpy as np
 
+from lfdfuse.estimate.resampling import ess, systematic
+
 Likelihood = Literal["vonmises", "paper"]
 
 
@@ -38,7 +45,7 @@ class PFParams:
     """Settings of the filter (see the module docstring)."""
 
     particles: int = 1000
-    likelihood: Likelihood = "vonmises"
+    likelihood: Likelihood = "paper"
     heading_noise_rad: float = math.radians(10.0)  # σ_h of the von Mises likelihood
     jitter0: float = 0.08  # σ₀ of the motion model
     jitter_min: float = 0.003  # σ_min
@@ -68,26 +75,6 @@ def log_likelihood(fused: np.ndarray, vr: np.ndarray, p: PFParams) -> np.ndarray
     return kappa * (cos - 1.0)
 
 
-def systematic_indices(logw: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Systematic resampling of every trial: ``logw (K, M)``, ``u (K,)`` in [0, 1) → ``(K, M)``."""
-    k, m = logw.shape
-    w = np.exp(logw - logw.max(axis=1, keepdims=True))
-    cs = np.cumsum(w, axis=1)
-    cs /= cs[:, -1:]
-    cs[:, -1] = 1.0
-    offs = np.arange(k)[:, None]
-    pos = (u[:, None] + np.arange(m)[None, :]) / m
-    idx = np.searchsorted((cs + offs).ravel(), (pos + offs).ravel(), side="right").reshape(k, m)
-    return np.minimum(idx - offs * m, m - 1)
-
-
-def ess(logw: np.ndarray) -> np.ndarray:
-    """Effective sample size ``(K,)`` of log-weights ``(K, M)``: ``(Σw)² / Σw²``."""
-    w = np.exp(logw - logw.max(axis=1, keepdims=True))
-    s1 = w.sum(axis=1)
-    return s1 * s1 / np.einsum("km,km->k", w, w)
-
-
 def step(
     s: np.ndarray,
     logw: np.ndarray,
@@ -107,7 +94,7 @@ def step(
     k, m, n = s.shape
     need = np.nonzero(ess(logw) < p.ess_fraction * m)[0]
     if len(need):
-        idx = systematic_indices(logw[need], u[need])
+        idx = systematic(logw[need], u[need])
         flat = s[need].reshape(-1, n)
         s = s.copy()
         s[need] = flat[(idx + (np.arange(len(need)) * m)[:, None]).ravel()].reshape(len(need), m, n)

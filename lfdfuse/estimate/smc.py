@@ -1,0 +1,224 @@
+"""Tempered SMC with resample-move: the sampler of ``--method pf``, batched over rows × trials.
+
+The target of chain ``c`` (row ``r``, trial ``k``) moves from the prior to the posterior of
+:mod:`lfdfuse.estimate.model` through ``π_β ∝ prior · L^β``, ``0 = β₀ < β₁ < … < 1``. One
+iteration (``__next__``):
+
+1. choose the next ``β`` per chain by bisection so that the effective sample size of the
+   incremental weights ``L^(β' − β)`` is ``ess_target · M`` (adaptive tempering);
+2. resample (systematic);
+3. rejuvenate: ``moves`` random-walk Metropolis steps in additive-log-ratio coordinates with
+   the Dirichlet density and Jacobian, the proposal covariance the particle covariance (scaled
+   by an acceptance-tuned factor). Each step leaves ``π_β`` invariant.
+
+A chain that has reached ``β = 1`` keeps moving until it has made ``final_moves`` moves there;
+then it is frozen. Every chain ends with ``M`` equally weighted draws from its posterior, for any
+number of steps in the row — nothing is forgotten and nothing is replayed.
+
+Rows of different sizes share one pass: the particle arrays are padded to the largest row's
+behaviours (masked out of the simplex); only the likelihood loops over rows, one matrix product
+each.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.special import logsumexp
+
+from lfdfuse.estimate.model import FusionModel, RowData, log_marginal, log_prior_alr, sample_prior
+from lfdfuse.estimate.resampling import ess, gather, resample
+
+
+@dataclass(frozen=True)
+class SMCParams:
+    """Settings of the sampler (see the module docstring)."""
+
+    particles: int = 384
+    ess_target: float = 0.5
+    moves: int = 3  # Metropolis moves after each resampling
+    final_moves: int = 6  # moves at β = 1 before a chain is frozen
+    max_iterations: int = 500
+
+
+@dataclass(frozen=True)
+class SMCResult:
+    """Per chain ``(C, …)``: particles' log-weights ``(C, M, n)``, mask ``(C, n)``, evidence."""
+
+    logw: np.ndarray
+    mask: np.ndarray
+    log_evidence: np.ndarray
+    iterations: int
+    acceptance: np.ndarray  # mean Metropolis acceptance per chain
+
+    @property
+    def weights(self) -> np.ndarray:
+        return np.asarray(np.exp(self.logw))
+
+    def mean(self) -> np.ndarray:
+        """Posterior means ``(C, n)`` (zero on padding)."""
+        return np.asarray(self.weights.mean(axis=1))
+
+    def cov(self) -> np.ndarray:
+        """Posterior covariances ``(C, n, n)``."""
+        w = self.weights
+        d = w - w.mean(axis=1, keepdims=True)
+        return np.asarray(np.einsum("cmi,cmj->cij", d, d) / max(1, w.shape[1] - 1))
+
+
+class _Rows:
+    """The rows' steps as ``[along; across] (2T, n)`` blocks: one BLAS product per row."""
+
+    def __init__(self, rows: Sequence[RowData]) -> None:
+        self.blocks = [np.ascontiguousarray(np.concatenate([r.along, r.across], axis=0)) for r in rows]
+        self.steps = [r.steps for r in rows]
+        self.sizes = [r.size for r in rows]
+
+    def sum_cos(self, w: np.ndarray, active: np.ndarray) -> np.ndarray:
+        """``S (R, P)`` for weights ``w (R, P, n)``; rows not ``active (R,)`` are left at 0.
+
+        A batched 3-D product is an order of magnitude slower here than a loop of 2-D ones.
+        """
+        out = np.zeros(w.shape[:2])
+        for i in np.nonzero(active)[0]:
+            t, n = self.steps[i], self.sizes[i]
+            x = self.blocks[i] @ w[i, :, :n].T  # (2T, P)
+            a, b = x[:t], x[t:]
+            r = np.sqrt(a * a + b * b)
+            out[i] = (a / np.maximum(r, 1e-12)).sum(axis=0)
+        return out
+
+
+class TemperedSMC:
+    """Adaptive-tempering SMC over ``rows`` × ``trials`` chains; iterate it, or call ``run()``."""
+
+    def __init__(
+        self,
+        rows: Sequence[RowData],
+        *,
+        trials: int,
+        model: FusionModel,
+        params: SMCParams,
+        rng: np.random.Generator,
+    ) -> None:
+        if not rows:
+            raise ValueError("no rows to sample")
+        self.model, self.params, self.rng = model, params, rng
+        self.rows_n = len(rows)
+        self.trials = trials
+        n = max(r.size for r in rows)
+        self.n = n
+        self.steps = np.repeat(np.array([r.steps for r in rows], dtype=np.float64), trials)
+        size = np.repeat(np.array([r.size for r in rows]), trials)
+        self.mask = np.arange(n)[None, :] < size[:, None]  # (C, n)
+        self.data = _Rows(rows)
+        c, m = len(self.steps), params.particles
+        self.logw = sample_prior((c, m), self.mask[:, None, :], model, rng)
+        self.ll = self._loglik(self.logw, np.ones(c, dtype=bool))
+        self.beta = np.zeros(c)
+        self.scale = np.full(c, 2.38 / math.sqrt(max(1, n - 1)))
+        self.final_done = np.zeros(c, dtype=np.int64)
+        self.log_evidence = np.zeros(c)
+        self.accepted = np.zeros(c)
+        self.proposed = np.zeros(c)
+        self.iterations = 0
+
+    # ------------------------------------------------------------------ the model, batched
+
+    def _loglik(self, logw: np.ndarray, active: np.ndarray) -> np.ndarray:
+        """Marginal log-likelihood ``(C, M)`` of every particle (0 for inactive chains)."""
+        c, m, n = logw.shape
+        k = self.trials
+        w = np.exp(logw).reshape(self.rows_n, k * m, n)
+        act_rows = np.asarray(active.reshape(self.rows_n, k).any(axis=1))
+        s = self.data.sum_cos(w, act_rows).reshape(c, m)
+        ll = log_marginal(s, self.steps[:, None], self.model)
+        return np.where(active[:, None], ll, 0.0)
+
+    # ------------------------------------------------------------------ the algorithm
+
+    @property
+    def done(self) -> bool:
+        return bool((self.final_done >= self.params.final_moves).all())
+
+    def __iter__(self) -> Iterator[TemperedSMC]:
+        return self
+
+    def __next__(self) -> TemperedSMC:
+        if self.done or self.iterations >= self.params.max_iterations:
+            raise StopIteration
+        active = self.final_done < self.params.final_moves
+        delta = self._next_delta(active)
+        inc = delta[:, None] * self.ll
+        self.log_evidence += np.where(active, logsumexp(inc, axis=1) - math.log(inc.shape[1]), 0.0)
+        idx = resample(inc, self.rng)
+        self.logw = gather(self.logw, idx)
+        self.ll = gather(self.ll, idx)
+        self.beta = np.where(active, np.minimum(1.0, self.beta + delta), self.beta)
+        self.beta[self.beta > 1.0 - 1e-12] = 1.0
+        for _ in range(self.params.moves):
+            self._move(active & (self.final_done < self.params.final_moves))
+            self.final_done += (self.beta >= 1.0) & active
+        self.iterations += 1
+        return self
+
+    def run(self) -> SMCResult:
+        for _ in self:
+            pass
+        return SMCResult(
+            self.logw,
+            self.mask,
+            self.log_evidence,
+            self.iterations,
+            self.accepted / np.maximum(self.proposed, 1.0),
+        )
+
+    def _next_delta(self, active: np.ndarray) -> np.ndarray:
+        """Per chain the temperature increment that brings the ESS to the target (bisection)."""
+        target = self.params.ess_target * self.ll.shape[1]
+        hi = np.where(active, 1.0 - self.beta, 0.0)
+        ok = ess(hi[:, None] * self.ll) >= target
+        lo = np.zeros_like(hi)
+        top = hi.copy()
+        for _ in range(30):
+            mid = 0.5 * (lo + top)
+            good = ess(mid[:, None] * self.ll) >= target
+            lo = np.where(good, mid, lo)
+            top = np.where(good, top, mid)
+        # never stall: a chain whose every step would collapse still advances a little
+        return np.where(ok, hi, np.maximum(lo, np.minimum(hi, 1e-6)))
+
+    def _move(self, active: np.ndarray) -> None:
+        """One random-walk Metropolis step in additive-log-ratio coordinates for active chains."""
+        if not active.any():
+            return
+        c, m, n = self.logw.shape
+        mask = self.mask[:, None, :]
+        mean_w = np.where(self.mask, np.exp(self.logw).mean(axis=1), -1.0)
+        ref = np.argmax(mean_w, axis=1)  # the heaviest behaviour is the denominator
+        lref = np.take_along_axis(self.logw, ref[:, None, None], axis=2)
+        y = np.where(mask, self.logw - lref, 0.0)  # (C, M, n); y_ref = 0
+        d = y - y.mean(axis=1, keepdims=True)
+        cov = np.einsum("cmi,cmj->cij", d, d) / max(1, m - 1) + 1e-8 * np.eye(n)
+        chol = np.linalg.cholesky(cov)
+        free = self.mask.copy()
+        free[np.arange(c), ref] = False
+        z = self.rng.standard_normal((c, m, n))
+        step = np.einsum("cij,cmj->cmi", chol, z) * self.scale[:, None, None]
+        y_new = np.where(free[:, None, :], y + step, np.where(mask, y, -np.inf))
+        logw_new = y_new - logsumexp(y_new, axis=2, keepdims=True)
+        ll_new = self._loglik(logw_new, active)
+        prior = log_prior_alr(self.logw, mask, self.model)
+        prior_new = log_prior_alr(logw_new, mask, self.model)
+        log_a = self.beta[:, None] * (ll_new - self.ll) + prior_new - prior
+        acc = (np.log(self.rng.uniform(0.0, 1.0, (c, m))) < log_a) & active[:, None]
+        self.logw = np.where(acc[:, :, None], logw_new, self.logw)
+        self.ll = np.where(acc, ll_new, self.ll)
+        rate = acc.mean(axis=1)
+        self.accepted += np.where(active, rate, 0.0)
+        self.proposed += active
+        # tune the proposal scale toward an acceptance of about 0.3 (higher in 1-D)
+        self.scale = np.where(active, self.scale * np.exp(rate - 0.3), self.scale)
