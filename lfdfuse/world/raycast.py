@@ -232,8 +232,8 @@ class RayCaster:
             lo, hi = int(self._offsets[c]), int(self._offsets[c + 1])
             bands = []
             size_start = lo
-            for size in _BANDS:
-                end = min(hi, size_start + size) if size != _BANDS[-1] else hi
+            for b, size in enumerate(_BANDS):
+                end = min(hi, size_start + size) if b < len(_BANDS) - 1 else hi
                 if end <= size_start:
                     break
                 cut = float(self._lower_um[end]) * 1e-6 if end < hi else math.inf
