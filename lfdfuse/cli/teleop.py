@@ -233,20 +233,20 @@ def live_view(
         goals = ", ".join(f"{n} at {t:.1f} s" for n, t in snap.reached) or "none yet"
         info = Text.assemble(
             (f"t {snap.wall_s:6.1f} s", "bold"),
-            f"   v {v:+.2f} m/s  ω {w:+.2f} rad/s",
-            f"   speed {snap.keys.speed_mps:.2f} m/s  turn {snap.keys.turn_rps:.2f} rad/s"
-            if help_text
-            else "",
-            f"   collisions {snap.collisions}",
+            f"  v {v:+.2f} m/s  ω {w:+.2f} rad/s",
+            f"  (speed {snap.keys.speed_mps:.2f}, turn {snap.keys.turn_rps:.2f})" if help_text else "",
+            f"  collisions {snap.collisions}",
             "\n",
             ("goals ", "bold"),
             goals,
-            f"   last input: {snap.last_input or '-'}",
-            f"   {status()}" if status else "",
+            f"  last input: {snap.last_input or '-'}",
+            f"  {status()}" if status else "",
+            no_wrap=True,
+            overflow="ellipsis",
         )
         parts: list[Any] = [Panel(grid, padding=0, title=f"lfdfuse teleop — {world.name}"), info]
         if help_text:
-            parts.append(Text(help_text, style="dim"))
+            parts.append(Text(help_text, style="dim", no_wrap=True, overflow="ellipsis"))
         return Group(*parts)
 
     return Live(console=console, get_renderable=render, refresh_per_second=10, transient=False)

@@ -56,9 +56,9 @@ STOPS = frozenset({"k", "space"})
 QUITS = frozenset({"esc", "ctrl-c"})
 
 HELP = (
-    "u i o   forward arcs / forward      q/z  all speeds ±10%\n"
-    "j k l   turn left / stop / right    w/x  linear ±10%, e/c turn ±10%\n"
-    "m , .   back arcs / back            arrows move, space stops, Esc or Ctrl-C ends and saves"
+    "u i o  forward arcs, forward     q/z  all speeds ±10% (w/x linear, e/c turn)\n"
+    "j k l  turn left, stop, right    space stops too, arrow keys move\n"
+    "m , .  back arcs, back           Esc or Ctrl-C ends the run and saves it"
 )
 
 _MIN_SPEED_MPS = 0.02
