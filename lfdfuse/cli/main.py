@@ -11,6 +11,7 @@ from lfdfuse.cli import (
     inspect,  # noqa: F401
     segment,  # noqa: F401
     simulate,  # noqa: F401
+    teleop,  # noqa: F401
     worlds,  # noqa: F401
 )
 from lfdfuse.cli.app import app
