@@ -133,7 +133,10 @@ def teleop_cmd(
                 f"  layout: Layouts → Import from file… → {layout_path()}", soft_wrap=True, markup=False
             )
             session = make_session(opts, inputs=[live])
-            with stop_on_signals(session), live_view(session, w, laser, status=lambda: _clients(live)):
+            with (
+                stop_on_signals(session),
+                live_view(session, w, laser, status=lambda: _clients(live), reserve=5),
+            ):
                 summary = teleop(opts, session=session, out=out, sinks=[live])
             console.print(f"  published {live.published} live messages")
     else:
@@ -208,6 +211,7 @@ def live_view(
     *,
     help_text: str = "",
     status: Any = None,
+    reserve: int = 0,
 ) -> Any:
     """A rich Live view refreshed 10 times a second, or nothing when stdout is not a terminal."""
     if not console.is_terminal:
@@ -223,7 +227,7 @@ def live_view(
         if not trail or trail[-1] != (snap.pose.x, snap.pose.y):
             trail.append((snap.pose.x, snap.pose.y))
         extra = help_text.count("\n") + 1 if help_text else 1
-        rows = max(6, height - 5 - extra)
+        rows = max(6, height - 5 - extra - reserve)  # reserve: lines printed above to keep in sight
         lines = render_map(
             world, snap.pose, snap.ranges_m, laser, cols=max(20, width - 2), rows=rows, trail=np.array(trail)
         )

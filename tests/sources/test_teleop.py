@@ -462,6 +462,23 @@ def test_sigterm_ends_a_keyboard_run_saves_it_and_restores_the_terminal(tmp_path
     assert not [p for p in tmp_path.iterdir() if p.name != out.name]  # no temp file left
 
 
+def test_raw_input_mode_is_undone_when_the_run_raises() -> None:
+    from lfdfuse.cli.teleop import raw_input_mode
+
+    master, slave = pty.openpty()
+    try:
+        before = termios.tcgetattr(slave)
+        with pytest.raises(RuntimeError), raw_input_mode(slave):
+            lflag = termios.tcgetattr(slave)[3]
+            assert not lflag & (termios.ECHO | termios.ICANON | termios.ISIG)
+            assert termios.tcgetattr(slave)[1] & termios.OPOST  # output stays cooked for rich
+            raise RuntimeError("a bug in the loop")
+        assert termios.tcgetattr(slave) == before
+    finally:
+        os.close(master)
+        os.close(slave)
+
+
 def test_keyboard_needs_a_terminal(tmp_path: Path) -> None:
     res = runner.invoke(app, ["teleop", "-o", str(tmp_path / "never.mcap")])
     assert res.exit_code == 1 and "needs a terminal" in res.output
