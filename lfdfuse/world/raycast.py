@@ -26,7 +26,11 @@ import numpy as np
 _EPS = 1e-12
 _TWO_PI = 2.0 * math.pi
 #: sizes of the candidate bands, nearest first; the last band takes all the rest
-_BANDS = (128, 512, 2048)
+_BANDS = (384, 3072)
+#: angular sectors of the cull of later bands (segments away from every unfinished beam)
+_SECTORS = 256
+#: later bands smaller than this are tested whole
+_CULL_MIN = 64
 #: cached per-cell band arrays, cleared when it grows past this many cells
 _CACHE_CELLS = 4096
 #: most (segment, cell) pairs examined at once while building the index
@@ -139,13 +143,18 @@ def _collinear(
 
 
 class _Band:
-    """The segments of one band of a cell, with what a cast needs precomputed."""
+    """The segments of one band of a cell, with what a cast needs precomputed.
 
-    __slots__ = ("seg", "ex", "ey", "slack", "cut_m")
+    ``bins`` ``(K, 2)``: per segment, the first and last of ``_SECTORS`` angular sectors from
+    which a ray leaving any point of the cell can hit it (last < first + _SECTORS); None when
+    the band is always tested whole.
+    """
 
-    def __init__(self, seg: np.ndarray, cut_m: float) -> None:
+    __slots__ = ("seg", "ex", "ey", "slack", "cut_m", "bins")
+
+    def __init__(self, seg: np.ndarray, cut_m: float, bins: np.ndarray | None = None) -> None:
         self.seg = np.ascontiguousarray(seg)
-        self.ex, self.ey = seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]
+        self.ex, self.ey = self.seg[:, 2] - self.seg[:, 0], self.seg[:, 3] - self.seg[:, 1]
         length = np.hypot(self.ex, self.ey)
         # Angular widening of the beam filter, divided by |cross| = h·length (h: distance from
         # the origin to the segment's line). The exact test accepts 1e-12·length past each end
@@ -154,6 +163,36 @@ class _Band:
         self.slack = (1e-11 * length + 1e-8) * length + 1e-30
         #: lower bound (m) of the distance from anywhere in the cell to any later band's segment
         self.cut_m = cut_m
+        self.bins = bins
+
+    def subset(self, keep: np.ndarray) -> _Band:
+        out = _Band.__new__(_Band)
+        out.seg, out.ex, out.ey, out.slack = self.seg[keep], self.ex[keep], self.ey[keep], self.slack[keep]
+        out.cut_m, out.bins = self.cut_m, None
+        return out
+
+
+def _sector_bins(seg: np.ndarray, cx: float, cy: float, radius_m: float) -> np.ndarray:
+    """Sectors ``(K, 2)`` (first, last) of the directions from a disc to each segment.
+
+    Seen from any point within ``radius_m`` of ``(cx, cy)``, a point of the segment lies within
+    asin(radius / d) of its direction from the centre (d: the segment's distance from it); a
+    segment closer than the radius can be seen in any direction.
+    """
+    w = seg - np.array([cx, cy, cx, cy])
+    cross = w[:, 0] * (seg[:, 3] - seg[:, 1]) - w[:, 1] * (seg[:, 2] - seg[:, 0])
+    ends = np.arctan2(w[:, 1::2], w[:, 0::2])
+    first = np.where(cross >= 0.0, ends[:, 0], ends[:, 1])
+    width = np.mod(ends[:, 0] + ends[:, 1] - 2.0 * first, _TWO_PI)
+    reach = radius_m + 1e-6
+    d = _point_segment_distance(np.array([cx]), np.array([cy]), seg)[0]
+    widen = np.arcsin(np.minimum(reach / np.maximum(d, reach), 1.0)) + 1e-6
+    width = np.where(d > reach, width + 2.0 * widen, _TWO_PI)
+    step = _TWO_PI / _SECTORS
+    lo = np.floor(np.mod(first - widen, _TWO_PI) / step).astype(np.int64)
+    lo = np.minimum(lo, _SECTORS - 1)
+    hi = np.minimum(lo + np.ceil(width / step).astype(np.int64) + 1, lo + _SECTORS - 1)
+    return np.column_stack([lo, hi])
 
 
 class RayCaster:
@@ -237,7 +276,12 @@ class RayCaster:
                 if end <= size_start:
                     break
                 cut = float(self._lower_um[end]) * 1e-6 if end < hi else math.inf
-                bands.append(_Band(self.segments[self._index[size_start:end]], cut))
+                seg = self.segments[self._index[size_start:end]]
+                bins = None
+                if b > 0 and end - size_start >= _CULL_MIN:
+                    centre = (self.x0 + (i + 0.5) * self.cell_m, self.y0 + (j + 0.5) * self.cell_m)
+                    bins = _sector_bins(seg, *centre, self.cell_m * math.sqrt(0.5))
+                bands.append(_Band(seg, cut, bins))
                 size_start = end
             if len(self._cache) >= _CACHE_CELLS:
                 self._cache.clear()
@@ -262,6 +306,8 @@ class RayCaster:
         phi[phi >= _TWO_PI] = 0.0
         active = np.argsort(phi)
         for band in self._bands(x, y):
+            if band.bins is not None:
+                band = self._facing(band, phi[active])
             if len(band.seg):
                 self._cast_band(band, x, y, dirs, phi, active, best)
             if band.cut_m == math.inf:
@@ -270,6 +316,17 @@ class RayCaster:
             if len(active) == 0:
                 break
         return np.minimum(best, self.max_range_m, out=best)
+
+    @staticmethod
+    def _facing(band: _Band, phi: np.ndarray) -> _Band:
+        """The band's segments in a sector of at least one of the beams at angles ``phi`` in [0, 2π)."""
+        assert band.bins is not None
+        occupied = np.zeros(2 * _SECTORS, dtype=np.int64)
+        sector = np.minimum((phi * (_SECTORS / _TWO_PI)).astype(np.int64), _SECTORS - 1)
+        occupied[sector] = 1
+        occupied[_SECTORS:] = occupied[:_SECTORS]
+        count = np.concatenate([[0], np.cumsum(occupied)])
+        return band.subset(count[band.bins[:, 1] + 1] > count[band.bins[:, 0]])
 
     @staticmethod
     def _cast_band(
