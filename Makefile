@@ -4,7 +4,7 @@ PY := $(VENV)/bin/python
 LFD := $(VENV)/bin/lfdfuse
 DEMO := build/demo
 
-.PHONY: demo test lint bench sample-logs install clean
+.PHONY: demo test lint bench sample-logs install clean paper
 
 $(VENV)/.installed: pyproject.toml
 	test -x $(PY) || python3 -m venv $(VENV)
@@ -41,6 +41,9 @@ bench: install
 
 sample-logs: install
 	$(PY) -m lfdfuse.tools.samples sample_logs
+
+paper: install
+	$(LFD) report -o build/paper
 
 clean:
 	rm -rf build

@@ -52,3 +52,22 @@ def test_no_global_numpy_rng() -> None:
             "np.random.choice(",
         ):
             assert bad not in text, f"{path} uses the global numpy RNG ({bad})"
+
+
+def test_only_viz_imports_matplotlib() -> None:
+    """Plots live in lfdfuse.viz; the CLI imports it inside the plot and report commands only."""
+    for path in LIB.rglob("*.py"):
+        parts = path.relative_to(LIB).parts
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            names: list[str] = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module:
+                names = [node.module]
+            for n in names:
+                if n.split(".")[0] == "matplotlib":
+                    assert parts[0] == "viz", f"{path} imports {n}"
+                if n.startswith("lfdfuse.viz") and parts[0] != "viz":
+                    # the CLI imports viz lazily, inside a function, so `lfdfuse --help` stays fast
+                    assert parts[0] == "cli" and node.col_offset > 0, f"{path} imports {n} at module level"

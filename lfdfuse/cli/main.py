@@ -9,6 +9,8 @@ from lfdfuse.cli import (
     execute,  # noqa: F401
     import_cmd,  # noqa: F401
     inspect,  # noqa: F401
+    plot,  # noqa: F401
+    report,  # noqa: F401
     segment,  # noqa: F401
     simulate,  # noqa: F401
     teleop,  # noqa: F401

@@ -1,0 +1,67 @@
+"""``lfdfuse report``."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import typer
+
+from lfdfuse.cli.app import app
+from lfdfuse.cli.common import console, err_console, user_errors
+
+
+@app.command("report")
+@user_errors
+def report_cmd(
+    out: Path = typer.Option(Path("paper-report"), "--out", "-o", help="Folder of the report (created)."),
+    seed: int = typer.Option(1, "--seed", help="Seed of every demonstration, estimate and run."),
+    quick: bool = typer.Option(
+        False, "--quick", help="Shorter runs, fewer starts and 3 trials: a smoke test of the report (~30 s)."
+    ),
+) -> None:
+    """Rerun the paper's experiments and write DIR/index.html, the figures and DIR/report.json.
+
+    Styles demonstrated in the small world (tee) and run in the small and the large one
+    (building) with the range-to-wall measure and the T-junction choice (paper Figs. 5-10); the
+    three-goal task from several starts (Section V-B.1); the weights over 30 estimation trials
+    (Figs. 12-14); obstacle passing (Fig. 15). The table beside each figure sets the paper's
+    result next to ours, measured in this run. `make paper` runs it into build/paper.
+
+    Examples:
+      lfdfuse report -o build/paper
+      lfdfuse report -o /tmp/smoke --quick
+    """
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from lfdfuse.viz.html import markdown_table  # matplotlib only when reporting
+    from lfdfuse.viz.report import ReportOptions, run_report
+
+    began = time.monotonic()
+    result = None
+    with Progress(
+        TextColumn("report"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total}"),
+        TextColumn("{task.description}"),
+        TimeElapsedColumn(),
+        console=err_console,
+        transient=True,
+        disable=not err_console.is_terminal,
+    ) as bar:
+        task = bar.add_task("", total=1)
+        for ev in run_report(ReportOptions(out=out, seed=seed, quick=quick)):
+            bar.update(task, total=ev.total, completed=ev.done, description=ev.label)
+            result = ev.result or result
+    assert result is not None
+    agree = sum(r.agrees is True for r in result.comparison)
+    differ = sum(r.agrees is False for r in result.comparison)
+    console.print(
+        f"[bold]report[/bold] → {out / 'index.html'}  ({len(result.figures)} figures, "
+        f"{time.monotonic() - began:.0f} s)"
+    )
+    console.print(
+        f"  {agree} results agree with the paper, {differ} differ, "
+        f"{len(result.comparison) - agree - differ} not comparable"
+    )
+    console.print(markdown_table(result.comparison), markup=False, soft_wrap=True)

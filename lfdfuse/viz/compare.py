@@ -1,0 +1,300 @@
+"""The comparison table of the report: the paper's result beside ours, measured in this run.
+
+The paper's side is quoted from its text (section and figure cited); where the paper gives a
+number only inside a figure we do not invent one and compare the claim instead. ``agrees`` is
+True or False when the claim can be checked on our numbers, None where it cannot (a different
+building, robot or demonstrator makes the count itself incomparable).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from lfdfuse.network.table import FusionTable
+from lfdfuse.segment.read import read_segmented
+from lfdfuse.viz.experiments import Learned, Run, passing_sides, step_of_ticks, task_order
+from lfdfuse.viz.load import table_steps
+from lfdfuse.world.model import load_world
+
+SIDE = {"keep-left": "left", "keep-center": "centre", "keep-right": "right"}
+
+
+@dataclass(frozen=True)
+class Row:
+    experiment: str
+    source: str  # where in the paper
+    paper: str
+    ours: str
+    agrees: bool | None
+    note: str = ""
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def _lr(run: Run) -> str:
+    r = run.report
+    return f"left {r['left_range_mean_m']:.2f} m / right {r['right_range_mean_m']:.2f} m"
+
+
+def _count(runs: list[Run], style: str) -> int:
+    return sum(r.style == style and r.report["collisions"] == 0 for r in runs)
+
+
+def task_ok(run: Run) -> bool:
+    rep = run.report
+    return bool(rep["completed"]) and task_order(rep) == ["red", "green", "blue"] and rep["collisions"] == 0
+
+
+def task_steps_kept(runs: list[Run]) -> tuple[int, int]:
+    """(steps whose style matched the demonstrated one, steps judged) over the completed runs."""
+    want = {"reach-red": "left", "reach-green": "centre", "reach-blue": "right"}
+    good = total = 0
+    for run in runs:
+        if not task_ok(run):
+            continue
+        for s in run.report["steps"]:
+            if s["name"] in want:
+                total += 1
+                good += s.get("style") == want[s["name"]]
+    return good, total
+
+
+def corridor_sides(left_m: np.ndarray, right_m: np.ndarray, *, sight_m: float = 2.0) -> tuple[float, float]:
+    """Median distance (m) to the left and right walls over the ticks with both walls in sight.
+
+    Means over doors, openings and crossings measure the building more than the robot (the paper
+    says as much of its Fig. 10); NaN when no tick has both walls in sight.
+    """
+    both = (left_m < sight_m) & (right_m < sight_m)
+    if not both.any():
+        return float("nan"), float("nan")
+    return float(np.median(left_m[both])), float(np.median(right_m[both]))
+
+
+def style_errors(learned: dict[str, Learned], runs: dict[str, list[Run]]) -> list[tuple[str, float, float]]:
+    """``(label, left error, right error)``: the runs' distance to each wall minus the demonstration's
+    (m), both as :func:`corridor_sides`; the task's steps against their goal segments."""
+    out = []
+    for style in SIDE:
+        lr = learned[style]
+        demo = corridor_sides(lr.demo_left, lr.demo_right)
+        for where in ("tee", "building"):
+            rs = runs[f"{style}/{where}"]
+            got = corridor_sides(
+                np.concatenate([r.left_m for r in rs]), np.concatenate([r.right_m for r in rs])
+            )
+            out.append((f"{style}\n{where}", got[0] - demo[0], got[1] - demo[1]))
+    task = learned["task"]
+    seg = read_segmented(task.segmented)
+    left, right = task.demo_left, task.demo_right
+    done = [r for r in runs["task"] if task_ok(r)]
+    steps_of: dict[str, list[str | None]] = {}
+    for k, step in enumerate(("reach-red", "reach-green", "reach-blue")):
+        if k >= len(seg.segments) or not done:
+            continue
+        s = seg.segments[k]
+        demo = corridor_sides(left[s.start : s.stop], right[s.start : s.stop])
+        rl, rr = [], []
+        for r in done:
+            ticks = steps_of.setdefault(r.log.name, step_of_ticks(r.log))
+            mask = np.array([t == step for t in ticks[: len(r.left_m)]], dtype=bool)
+            mask = np.pad(mask, (0, len(r.left_m) - len(mask)))
+            rl.append(r.left_m[mask])
+            rr.append(r.right_m[mask])
+        got = corridor_sides(np.concatenate(rl), np.concatenate(rr))
+        out.append((f"task\n{step}", got[0] - demo[0], got[1] - demo[1]))
+    return out
+
+
+def weight_stats(table: FusionTable) -> dict[str, Any]:
+    """Per goal step: its BAC rows with samples and spreads; overall: median and largest spread."""
+    steps = []
+    spreads: list[tuple[float, int, str, int]] = []
+    for s in table_steps(table):
+        rows = []
+        for r in s.rows:
+            tmax = max((r.trial_std or {}).values(), default=0.0)
+            pmax = max((r.std or {}).values(), default=0.0)
+            rows.append(
+                {
+                    "bac": r.bac,
+                    "samples": r.samples,
+                    "max_trial_std": tmax,
+                    "max_std": pmax,
+                    "identifiable": r.identifiable,
+                    "weights": r.weights,
+                }
+            )
+            spreads.append((tmax, r.samples or 0, s.name, r.bac))
+        steps.append({"name": s.name, "goal": s.goal, "bacs": len(s.rows), "rows": rows})
+    arr = np.array([x[0] for x in spreads]) if spreads else np.zeros(1)
+    worst = max(spreads, default=(0.0, 0, "", 0))
+    big = [x[0] for x in spreads if x[1] >= 100]
+    return {
+        "steps": steps,
+        "median_max_trial_std": float(np.median(arr)),
+        "largest_trial_std": {"value": worst[0], "samples": worst[1], "step": worst[2], "bac": worst[3]},
+        "largest_trial_std_rows_100_samples": float(max(big, default=0.0)),
+    }
+
+
+def rows(
+    learned: dict[str, Learned],
+    runs: dict[str, list[Run]],
+    junctions: dict[str, dict[str, str]],
+    errors: list[tuple[str, float, float]],
+    *,
+    quick: bool,
+) -> Iterator[Row]:
+    """The comparison rows, in the paper's order."""
+    for style, fig in (
+        ("keep-left", "Fig. 6 top left"),
+        ("keep-center", "Fig. 6 top right"),
+        ("keep-right", "Fig. 6 bottom"),
+    ):
+        run = runs[f"{style}/tee"][0]
+        want = SIDE[style]
+        paper = {
+            "keep-left": "keeps closer to the left wall during the entire run",
+            "keep-center": "no side preference; drifts left, drawn by open doors",
+            "keep-right": "keeps to the right wall",
+        }[style]
+        note = ""
+        if style == "keep-center":
+            note = "The paper's own centre run drifted left; we judge it by the demonstrated style, centre."
+        yield Row(
+            f"{style} learned and run in the small world",
+            f"Sec. V-A Scenario 3, {fig}",
+            paper,
+            f"keeps {run.style} ({_lr(run)})",
+            run.style == want,
+            note,
+        )
+    parts, ok = [], True
+    for style, want in SIDE.items():
+        rs = runs[f"{style}/building"]
+        n = _count(rs, want)
+        ok &= n == len(rs)
+        parts.append(f"{style}: {n}/{len(rs)} keep {want}")
+    yield Row(
+        "styles learned in the small world, run in the large one",
+        "Sec. V-A Scenario 2; Fig. 9",
+        "the learned side preference holds in a different building",
+        "; ".join(parts) + " (0 collisions counted as required)",
+        ok,
+        "The paper shows paths, not counts; we count runs from different corridor starts.",
+    )
+    yield Row(
+        "T-junction (left or right)",
+        "Sec. V-A Scenarios 2–3; Fig. 7",
+        "left weights turn left, right weights turn right",
+        f"left turns {junctions['keep-left']['T']}, right turns {junctions['keep-right']['T']}",
+        junctions["keep-left"]["T"] == "left" and junctions["keep-right"]["T"] == "right",
+    )
+    yield Row(
+        "rotated T (straight or left)",
+        "Sec. V-A Scenario 2",
+        "left weights go left, right weights go straight",
+        f"left goes {junctions['keep-left']['rotated T']}, right goes {junctions['keep-right']['rotated T']}",
+        junctions["keep-left"]["rotated T"] == "left" and junctions["keep-right"]["rotated T"] == "straight",
+    )
+    yield Row(
+        "centre style at the T-junction",
+        "Sec. V-A Scenario 3; Fig. 6 top right",
+        "no preferred direction (goes far into the T before turning)",
+        f"turns {junctions['keep-center']['T']}; at the rotated T goes {junctions['keep-center']['rotated T']}",
+        None,
+        "One run per junction cannot show the absence of a preference.",
+    )
+    b = {s: runs[f"{s}/building"] for s in SIDE}
+
+    def mean(s: str, key: str) -> float:
+        return float(np.mean([r.report[key] for r in b[s]]))
+
+    gap = {s: mean(s, "left_range_mean_m") - mean(s, "right_range_mean_m") for s in SIDE}
+    yield Row(
+        "range-to-wall style measure (large world)",
+        "Sec. V-B.2; Fig. 10",
+        "left style nearer the left wall, right style nearer the right, centre's two ranges closer together",
+        "left − right mean range: " + ", ".join(f"{s} {gap[s]:+.2f} m" for s in SIDE),
+        gap["keep-left"] < 0 < gap["keep-right"]
+        and abs(gap["keep-center"]) < min(abs(gap["keep-left"]), abs(gap["keep-right"])),
+        "The paper's Fig. 10 is measured on a real robot in its building, the values only in the figure.",
+    )
+    errs = errors
+    vals = [abs(v) for e in errs for v in e[1:] if np.isfinite(v)]
+    mae = float(np.mean(vals)) if vals else float("nan")
+    yield Row(
+        "demonstrated vs learned distance to the walls",
+        "Sec. V-B.2; Fig. 11 left",
+        "the demonstrated distance is not captured perfectly, but the side preference is",
+        f"mean |run − demonstration| {mae:.2f} m over {len(errs)} style/world/step pairs "
+        "(medians where both walls are within 2 m; fig11-style-error)",
+        None,
+        "No number in the paper's text to compare with.",
+    )
+    task = runs["task"]
+    done = sum(task_ok(r) for r in task)
+    yield Row(
+        "three-goal task from several starts",
+        "Sec. V-B.1 (Physical Scenario 1)",
+        "5 of 6 runs complete (the paper writes 85 %); the failure was a goal the camera missed",
+        f"{done} of {len(task)} complete red → green → blue without collision",
+        done / len(task) >= 5 / 6,
+        "Ours is simulated: no lighting changes, perfect target detection within camera reach.",
+    )
+    good, total = task_steps_kept(task)
+    yield Row(
+        "style of each step of the task",
+        "Sec. V-B.1",
+        "every run kept left to goal 1, centre to goal 2, right to goal 3",
+        f"{good} of {total} steps of completed runs kept the demonstrated style",
+        total > 0 and good == total,
+    )
+    ws = weight_stats(learned["trials"].table)
+    counts = [st["bacs"] for st in ws["steps"][:3]]
+    yield Row(
+        "BACs per goal",
+        "Sec. V-B.3; Figs. 12–14",
+        "8, 5 and 9 BACs for goals 1, 2, 3",
+        ", ".join(str(c) for c in counts) + " BACs",
+        None,
+        "The count depends on the building and the route; ours is a simulated building of the paper's topology.",
+    )
+    worst = ws["largest_trial_std"]
+    yield Row(
+        f"weights over {learned['trials'].table.estimated_by.get('trials', '?')} trials",
+        "Sec. V-B.3; Figs. 12–14",
+        "small std everywhere: one solution; the largest std on a BAC with only 21 samples",
+        f"median largest std per row {ws['median_max_trial_std']:.3f}; largest {worst['value']:.3f} "
+        f"(BAC {worst['bac']} of {worst['step']}, {worst['samples']} samples); "
+        f"≤ {ws['largest_trial_std_rows_100_samples']:.3f} on rows with ≥ 100 samples",
+        ws["largest_trial_std_rows_100_samples"] < 0.05,
+        "Our sampler's spread over trials is small by design; the posterior std (fig12-14-posterior) says how much "
+        "the data leaves open, which the paper's trial spread does not measure."
+        + (" Quick mode: 3 trials only." if quick else ""),
+    )
+    parts, ok = [], True
+    for style in ("pass-left", "pass-right"):
+        want = style.split("-")[1]
+        centres = [(o.circle[0], o.circle[1]) for o in load_world("obstacles").obstacles if o.circle]
+        rs = runs[style]
+        good_runs = 0
+        for r in rs:
+            sides = passing_sides(r.pose, centres)
+            good_runs += len(sides) >= 3 and set(sides) == {want} and r.report["collisions"] == 0
+        ok &= good_runs == len(rs)
+        parts.append(f"{style}: {good_runs}/{len(rs)} runs pass every obstacle on the {want}")
+    yield Row(
+        "obstacle passing",
+        "Sec. V-B Physical Scenario 2; Fig. 15",
+        "3 runs per controller; the robot passed on the demonstrated side",
+        "; ".join(parts),
+        ok,
+        "The paper had four demonstrations (centre or side, passing left or right); we run two (pass left, pass right).",
+    )

@@ -1,0 +1,241 @@
+"""Files into plot data, through the readers of :mod:`lfdfuse.log` and :mod:`lfdfuse.segment`.
+
+A demo, segmented or run MCAP becomes a :class:`PathData` (the map, the path on the clock of
+the laser scans, what part of the task each tick belongs to, BAC changes, goals reached and
+collisions); a fusion table is read with :func:`lfdfuse.network.table.load_table`. Nothing
+here draws: the figures take these dataclasses.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import orjson
+import shapely
+
+from lfdfuse.errors import LfdError, LogError
+from lfdfuse.files import parse_yaml
+from lfdfuse.log import lfd
+from lfdfuse.log.reader import file_info, hold, iter_messages, read_run
+from lfdfuse.network.table import FusionRow, FusionTable, Network
+from lfdfuse.segment.read import read_segmented
+from lfdfuse.sim.robot import RobotParams
+from lfdfuse.world.model import World, builtin_names, load_world, parse_world
+
+LogKind = Literal["demo", "segmented", "run"]
+
+
+@dataclass(frozen=True)
+class GoalMark:
+    """A goal reached: the target's name, where the robot was (m) and when (s from the start)."""
+
+    target: str
+    x: float
+    y: float
+    t_s: float
+
+
+@dataclass(frozen=True)
+class PathData:
+    """What a log shows on a map.
+
+    ``t_s (N,)`` seconds from the first scan, ``pose (N, 3)`` x, y (m), yaw (rad); ``part (N,)``
+    indexes ``part_names`` (the goal segment or the network step of each tick; -1: none, e.g. a
+    run after its last goal); ``bac (N,)`` the BAC of each tick (None for a plain demo);
+    ``collisions`` tick indices where a contact began.
+    """
+
+    kind: LogKind
+    source: str
+    world: World | None
+    t_s: np.ndarray
+    pose: np.ndarray
+    part: np.ndarray
+    part_names: tuple[str, ...]
+    bac: np.ndarray | None
+    goals: tuple[GoalMark, ...]
+    collisions: np.ndarray
+    metadata: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def part_label(self) -> str:
+        return {"demo": "demonstration", "segmented": "goal segment", "run": "network step"}[self.kind]
+
+    def bac_changes(self) -> np.ndarray:
+        """Indices of the ticks whose BAC differs from the tick before."""
+        if self.bac is None or len(self.bac) < 2:
+            return np.zeros(0, dtype=np.int64)
+        return np.nonzero(self.bac[1:] != self.bac[:-1])[0] + 1
+
+
+def log_kind(path: str | Path) -> LogKind:
+    """``run`` (has ``/lfd/step``), ``segmented`` (has ``/lfd/segment``) or ``demo``."""
+    channels = file_info(path).channels
+    if "/lfd/step" in channels:
+        return "run"
+    if "/lfd/segment" in channels:
+        return "segmented"
+    return "demo"
+
+
+def world_of(world_yaml: str | None, metadata: dict[str, str], source: str) -> World | None:
+    """The world a log was recorded in: its attachment, else a built-in world it names, else None."""
+    if world_yaml:
+        try:
+            return parse_world(parse_yaml(world_yaml, origin=f"{source}:world.yaml"), origin=source)
+        except LfdError:
+            pass  # an attachment we cannot parse: fall back to the name, or draw without a map
+    name = metadata.get("world", "")
+    return load_world(name) if name in builtin_names() else None
+
+
+def contacts(
+    pose: np.ndarray, v_mps: np.ndarray, world: World | None, *, radius_m: float = RobotParams().radius_m
+) -> np.ndarray:
+    """Ticks where a contact with a wall began: a forward command that did not move the robot,
+    against a wall (the simulator refuses such moves and counts one collision per contact).
+
+    ``pose (N, 3)``, ``v_mps (N,)`` the command of each tick.
+    """
+    if world is None or len(pose) < 2:
+        return np.zeros(0, dtype=np.int64)
+    step = np.hypot(np.diff(pose[:, 0]), np.diff(pose[:, 1]))
+    near = shapely.distance(shapely.points(pose[:-1, :2]), world.geometry()) < radius_m + 0.1
+    stuck = (np.abs(v_mps[:-1]) > 0.02) & (step < 1e-4) & near
+    onset = stuck & ~np.concatenate([[False], stuck[:-1]])
+    return np.nonzero(onset)[0].astype(np.int64)
+
+
+def _goal_name(goal: str | None) -> str | None:
+    if goal is None:
+        return None
+    return goal[len("attract_") :] if goal.startswith("attract_") else goal
+
+
+def load_log(path: str | Path) -> PathData:
+    """A demo, segmented or run MCAP as plot data; a clear error if it has no path to draw."""
+    src = str(path)
+    kind = log_kind(path)
+    run = read_run(path)
+    if run.pose is None:
+        raise LogError(f"{src}: the log has no /pose: there is no path to draw")
+    t0 = int(run.t_ns[0])
+    t_s = (run.t_ns - t0).astype(np.float64) / 1e9
+    pose = run.pose
+    world = world_of(run.world_yaml, run.metadata, src)
+    v = run.cmd_v_mps[hold(run.cmd_t_ns, run.t_ns)] if len(run.cmd_t_ns) else np.zeros(len(run))
+    hits = contacts(pose, v, world)
+    if kind == "segmented":
+        return _segmented(path, src, world, t_s, pose, run.t_ns, hits, run.metadata)
+    if kind == "run":
+        return _run(path, src, world, t_s, pose, run.t_ns, hits, run.metadata)
+    return PathData(
+        "demo",
+        src,
+        world,
+        t_s,
+        pose,
+        np.zeros(len(t_s), dtype=np.int64),
+        (str(run.metadata.get("teacher") or "demonstration"),),
+        None,
+        (),
+        hits,
+        run.metadata,
+    )
+
+
+def _segmented(
+    path: str | Path,
+    src: str,
+    world: World | None,
+    t_s: np.ndarray,
+    pose: np.ndarray,
+    scan_t: np.ndarray,
+    hits: np.ndarray,
+    meta: dict[str, str],
+) -> PathData:
+    seg = read_segmented(path)
+    at = hold(seg.t_ns, scan_t)
+    names, goals = [], []
+    for s in seg.segments:
+        g = _goal_name(s.goal)
+        names.append(f"{s.index}: to {g}" if g else f"{s.index}: no goal reached")
+        if g is not None:
+            i = int(np.clip(np.searchsorted(scan_t, seg.t_ns[s.stop - 1]), 0, len(scan_t) - 1))
+            goals.append(GoalMark(g, float(pose[i, 0]), float(pose[i, 1]), float(t_s[i])))
+    index = {s.index: j for j, s in enumerate(seg.segments)}
+    part = np.array([index[int(x)] for x in seg.segment_of[at]], dtype=np.int64)
+    return PathData(
+        "segmented", src, world, t_s, pose, part, tuple(names), seg.bac[at], tuple(goals), hits, meta
+    )
+
+
+def _run(
+    path: str | Path,
+    src: str,
+    world: World | None,
+    t_s: np.ndarray,
+    pose: np.ndarray,
+    scan_t: np.ndarray,
+    hits: np.ndarray,
+    meta: dict[str, str],
+) -> PathData:
+    step_t: list[int] = []
+    steps: list[str | None] = []
+    bacs: list[int] = []
+    achieved: list[tuple[int, str]] = []
+    seen: set[str] = set()
+    try:
+        for _topic, _schema, t, data in iter_messages(path, topics=["/lfd/step"]):
+            msg = orjson.loads(data)
+            name, bac, _default = lfd.decode_step(msg)
+            step_t.append(t)
+            steps.append(name)
+            bacs.append(bac)
+            for g in msg.get("achieved") or []:
+                if g not in seen:
+                    seen.add(g)
+                    achieved.append((t, str(g)))
+    except (orjson.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
+        raise LogError(f"{src}: broken /lfd/step messages ({exc.__class__.__name__})") from exc
+    if not step_t:
+        raise LogError(f"{src}: /lfd/step has no messages")
+    names = tuple(dict.fromkeys(s for s in steps if s is not None))
+    at = hold(np.array(step_t, dtype=np.int64), scan_t)
+    code = {n: j for j, n in enumerate(names)}
+    part = np.array([code.get(steps[i], -1) if steps[i] else -1 for i in at], dtype=np.int64)
+    goals = []
+    for t, g in achieved:
+        i = int(np.clip(np.searchsorted(scan_t, t), 0, len(scan_t) - 1))
+        goals.append(GoalMark(g, float(pose[i, 0]), float(pose[i, 1]), float(t_s[i])))
+    bac = np.array(bacs, dtype=np.int64)[at]
+    return PathData("run", src, world, t_s, pose, part, names, bac, tuple(goals), hits, meta)
+
+
+# ------------------------------------------------------------------------------ tables
+
+
+@dataclass(frozen=True)
+class StepRows:
+    """One fusion primitive of a table: its name (nested steps as ``outer/inner``), goal and rows."""
+
+    name: str
+    goal: str | None
+    rows: tuple[FusionRow, ...]
+
+
+def table_steps(table: FusionTable) -> list[StepRows]:
+    """Every fusion primitive of a table, depth first (a nested network's steps in its place)."""
+
+    def walk(net: Network, prefix: str) -> Iterator[StepRows]:
+        for s in net.steps:
+            if s.network is not None:
+                yield from walk(s.network, f"{prefix}{s.name}/")
+            else:
+                yield StepRows(f"{prefix}{s.name}", s.goal, s.fusion)
+
+    return list(walk(table.network, ""))

@@ -1,0 +1,64 @@
+"""``lfdfuse report --quick``: every experiment runs, the figures are images, the table compares."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from matplotlib.image import imread
+from typer.testing import CliRunner
+
+from lfdfuse.cli.main import app
+from lfdfuse.viz.report import ReportEvent, ReportOptions, run_report
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[ReportEvent]]:
+    out = tmp_path_factory.mktemp("paper") / "report"
+    events = list(run_report(ReportOptions(out=out, seed=1, quick=True)))
+    return out, events
+
+
+def test_progress_events_count_up_to_a_result(report: tuple[Path, list[ReportEvent]]) -> None:
+    _out, events = report
+    done = [e.done for e in events]
+    assert done == sorted(done) and done[0] == 0 and done[-1] == events[-1].total
+    assert all(e.result is None for e in events[:-1]) and events[-1].result is not None
+
+
+def test_index_html_has_the_comparison_and_every_figure(report: tuple[Path, list[ReportEvent]]) -> None:
+    out, events = report
+    result = events[-1].result
+    assert result is not None
+    html = (out / "index.html").read_text()
+    assert html.count("<tr>") == len(result.comparison) + 1
+    assert len(result.comparison) >= 10
+    assert len(result.figures) >= 8
+    for fig in result.figures:
+        assert f'src="{fig.file}"' in html
+        img = imread(out / fig.file)
+        assert img.shape[1] >= 800 and img.shape[0] >= 500, fig.file
+        assert img[:, :, :3].std() > 0.05, fig.file  # not a blank canvas
+
+
+def test_report_json_has_every_number(report: tuple[Path, list[ReportEvent]]) -> None:
+    out, _events = report
+    data = json.loads((out / "report.json").read_text())
+    assert data["format"] == "lfdfuse/paper-report@1" and data["quick"] is True
+    rows = data["comparison"]
+    assert all(r["paper"] and r["ours"] and r["source"] for r in rows)
+    assert {r["agrees"] for r in rows} <= {True, False, None}
+    task = data["runs"]["task"]
+    assert len(task) == 2 and all("left_range_mean_m" in r for r in task)
+    assert len(data["weights"]["steps"]) >= 3
+    for f in data["figures"]:
+        assert (out / f["file"]).is_file()
+    assert (out / "logs" / "three-goals.seg.mcap").is_file()
+
+
+def test_report_into_a_file_is_a_user_error(tmp_path: Path) -> None:
+    target = tmp_path / "file"
+    target.write_text("x")
+    res = CliRunner().invoke(app, ["report", "-o", str(target), "--quick"])
+    assert res.exit_code == 1 and res.output.startswith("error:")
