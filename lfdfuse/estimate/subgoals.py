@@ -100,10 +100,11 @@ def estimate_with_subgoals(
         inner: list[Step] = []
         for k, d in enumerate(mine):
             drive, turn = parts[2 * k], parts[2 * k + 1]
+            tag = f"-{k + 1}" if len(mine) > 1 else ""
             inner.append(
                 replace(
                     drive,
-                    name=f"to-{d.side}-opening-{k + 1}",
+                    name=f"to-{d.side}-opening-{d.nth}{tag}",
                     goal=None,
                     landmark=Landmark("opening", d.side, d.nth, d.odometry_m),
                 )
@@ -111,7 +112,7 @@ def estimate_with_subgoals(
             inner.append(
                 replace(
                     turn,
-                    name=f"turn-{d.side}-{k + 1}",
+                    name=f"turn-{d.side}{tag}",
                     goal=None,
                     landmark=Landmark("turned", d.side, angle_rad=d.angle_rad),
                 )

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lfdfuse.behaviors.primitives import BehaviorOutputs
+from lfdfuse.network.landmarks import Cues, Progress
 from lfdfuse.network.table import FusionTable, Network, Step
 
 Path = tuple[int, ...]
@@ -40,6 +41,8 @@ class NetworkRuntime:
         self.table = table
         self.achieved: set[Path] = set()
         self._has_goal = bool(table.goals())
+        #: what the active step has sensed since it began (its landmark decides from this)
+        self.progress = Progress.fresh()
 
     def active(self) -> tuple[Path, Step] | None:
         """The active fusion step, depth first; None when every goal is achieved."""
@@ -79,13 +82,21 @@ class NetworkRuntime:
                 return True
         return False
 
-    def decide(self, outputs: BehaviorOutputs, reached: set[str]) -> Decision:
-        """One tick: ``outputs`` of the table's behaviours (N = 1), ``reached`` targets now."""
+    def decide(self, outputs: BehaviorOutputs, reached: set[str], cues: Cues | None = None) -> Decision:
+        """One tick: ``outputs`` of the table's behaviours (N = 1), ``reached`` targets now,
+        ``cues`` the landmark cues of this tick (openings, odometry; None: nothing sensed)."""
         achieved_now: list[str] = []
+        self.progress.add(cues or Cues())
         found = self.active()
-        while found is not None and found[1].goal is not None and found[1].goal in reached:
-            self.achieved.add(found[0])
-            achieved_now.append(found[1].goal)
+        while found is not None:
+            done = self._achieved_by(found[0], reached)
+            if done is None:
+                break
+            self.achieved.add(done)
+            self.progress = Progress.fresh()  # a sub-goal's landmark counts from its step's start
+            goal = self._step_at(done).goal
+            if goal is not None:
+                achieved_now.append(goal)
             found = self.active()
         bac = int(outputs.bac[0])
         if found is None or self.complete:
@@ -98,6 +109,34 @@ class NetworkRuntime:
         if row is not None and float(np.hypot(*fused)) <= 1e-9:
             fused = self.fuse(outputs, fallback)
         return Decision(step, path, bac, dict(weights), row is None, fused, tuple(achieved_now))
+
+    def _step_at(self, path: Path) -> Step:
+        net, step = self.table.network, None
+        for i in path:
+            step = net.steps[i]
+            if step.network is not None:
+                net = step.network
+        assert step is not None
+        return step
+
+    def _achieved_by(self, path: Path, reached: set[str]) -> Path | None:
+        """The outermost step on ``path`` achieved now, or None.
+
+        A leaf with a target goal is achieved when the target is reached. A sub-goal leaf (one
+        with a landmark) is achieved when its landmark is met — or, with the rest of its node,
+        when the node's target is reached early (a favourable change: the goal came into reach
+        before the turn-off).
+        """
+        leaf = self._step_at(path)
+        if leaf.landmark is None:
+            return path if leaf.goal is not None and leaf.goal in reached else None
+        for depth in range(1, len(path)):
+            step = self._step_at(path[:depth])
+            if step.goal is not None and step.goal in reached:
+                return path[:depth]
+        if leaf.landmark is not None and leaf.landmark.met(self.progress):
+            return path
+        return None
 
     def fuse(self, outputs: BehaviorOutputs, weights: dict[str, float]) -> np.ndarray:
         names = self.table.behaviors

@@ -25,6 +25,7 @@ SUITES = {
     "pipeline": "lfdfuse.tools.bench_pipeline",
     "world": "lfdfuse.tools.bench_world",
     "estimate": "lfdfuse.tools.bench_estimate",
+    "offroute": "lfdfuse.tools.bench_offroute",
 }
 
 app = typer.Typer(add_completion=False, pretty_exceptions_enable=False)

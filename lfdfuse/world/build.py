@@ -84,7 +84,84 @@ def obstacles() -> dict[str, Any]:
     }
 
 
-WORLDS = {"corridor": corridor, "tee": tee, "building": building, "obstacles": obstacles}
+def ring_spur() -> dict[str, Any]:
+    w = 2.4
+    rects: list[Rect] = [
+        (0, 0, 32, w),  # south corridor
+        (0, 22 - w, 32, 22),  # north corridor
+        (0, 0, w, 22),  # west corridor
+        (32 - w, 0, 32, 22),  # east corridor
+        (21, 22 - w - 7, 21 + w, 22 - w),  # a dead-end spur, 7 m deep, south off the north corridor
+    ]
+    return {
+        "name": "ring-spur",
+        "description": "32 x 22 m corridor ring with a 7 m dead-end spur off the north corridor; green at its end, out of camera view from the ring (goals off the style's route)",
+        "walls": _walls(rects),
+        "targets": [
+            {"name": "red", "position": [14.0, 1.2], "radius": 0.25},
+            {"name": "green", "position": [22.2, 13.4], "radius": 0.25},
+            {"name": "blue", "position": [1.2, 9.0], "radius": 0.25},
+        ],
+        "start": [8.5, 1.2, 0.0],
+    }
+
+
+def ring_spur_large() -> dict[str, Any]:
+    w = 2.6
+    rects: list[Rect] = [
+        (0, 0, 44, w),
+        (0, 28 - w, 44, 28),
+        (0, 0, w, 28),
+        (44 - w, 0, 44, 28),
+        (29, 28 - w - 8, 29 + w, 28 - w),  # the spur: same topology, other lengths
+    ]
+    return {
+        "name": "ring-spur-large",
+        "description": "ring-spur's topology at another scale: 44 x 28 m ring, 2.6 m corridors, an 8 m spur farther along (transfer of learned turn-offs)",
+        "walls": _walls(rects),
+        "targets": [
+            {"name": "red", "position": [20.0, 1.3], "radius": 0.25},
+            {"name": "green", "position": [30.3, 18.2], "radius": 0.25},
+            {"name": "blue", "position": [1.3, 12.0], "radius": 0.25},
+        ],
+        "start": [14.0, 1.3, 0.0],
+    }
+
+
+def office_room() -> dict[str, Any]:
+    w = 2.4
+    rects: list[Rect] = [
+        (0, 0, 40, w),  # south corridor
+        (0, 14 - w, 40, 14),  # north corridor
+        (0, 0, w, 14),  # west corridor
+        (40 - w, 0, 40, 14),  # east corridor
+        (12, -4.5, 17, -0.3),  # office A (empty), below the south corridor
+        (13.5, -0.3, 15.5, 0),  # its 2 m door
+        (24, -4.5, 29, -0.3),  # office B: green behind the wall beside its door
+        (26, -0.3, 28, 0),
+    ]
+    return {
+        "name": "office-room",
+        "description": "40 x 14 m corridor loop with two offices off the south corridor; green in the second, hidden beside its door (goals off the style's route)",
+        "walls": _walls(rects),
+        "targets": [
+            {"name": "red", "position": [8.0, 1.2], "radius": 0.25},
+            {"name": "green", "position": [25.3, -3.0], "radius": 0.25},
+            {"name": "blue", "position": [38.8, 8.0], "radius": 0.25},
+        ],
+        "start": [3.5, 1.2, 0.0],
+    }
+
+
+WORLDS = {
+    "corridor": corridor,
+    "tee": tee,
+    "building": building,
+    "obstacles": obstacles,
+    "ring-spur": ring_spur,
+    "ring-spur-large": ring_spur_large,
+    "office-room": office_room,
+}
 
 
 def render(name: str) -> str:

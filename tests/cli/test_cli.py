@@ -56,7 +56,7 @@ def in_tmp(tmp_path: Path) -> Path:
 
 
 def test_simulate_bad_input(in_tmp: Path) -> None:
-    assert "building, corridor, obstacles, tee" in _error(
+    assert "building, corridor, obstacles, office-room, ring-spur, ring-spur-large, tee" in _error(
         ["simulate", "--world", "mars", "-o", "x.mcap"], in_tmp
     )
     (in_tmp / "bad.yaml").write_text("walls: [[[0, 0], [1, 1]]\nstart: [")

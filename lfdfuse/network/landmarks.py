@@ -1,0 +1,126 @@
+"""Sub-goals at decision points: landmark postconditions of a fusion step (issue 15).
+
+A person turns into a side corridor because they know the goal is there, long before the
+camera sees it. The learned network reproduces that turn with two extra fusion steps inside
+the goal's step: *drive on to the n-th opening on a side* (the style's weights) and *turn into
+it* (the weights the teacher turned with), each ended by a landmark the robot recognises from
+its own sensors — never map coordinates:
+
+``{opening: left, nth: 1, odometry_m: 7.9}``
+    met at the onset of the ``nth`` opening on the left since the step began
+    (``odometry_m``: how far the teacher had driven by then, for reading; not used to match —
+    distances change from building to building, the order of openings does not);
+``{turned: left, angle_rad: 1.2}``
+    met once the robot has turned that far toward that side since the step began.
+
+:class:`Progress` is what a running step has sensed since it began; :meth:`Landmark.met`
+decides from it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from lfdfuse.behaviors.landmarks import SIDES
+from lfdfuse.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class Cues:
+    """What the robot sensed this tick: opening onsets and odometry increments."""
+
+    onset_left: bool = False
+    onset_right: bool = False
+    step_m: float = 0.0
+    turn_rad: float = 0.0  # + = left
+
+
+@dataclass
+class Progress:
+    """Openings passed, distance driven and heading change since the active step began."""
+
+    openings: list[int]  # onsets on (left, right)
+    travelled_m: float = 0.0
+    turned_rad: float = 0.0
+    onset: tuple[bool, bool] = (False, False)  # at this tick
+
+    @staticmethod
+    def fresh() -> Progress:
+        return Progress([0, 0])
+
+    def add(self, cues: Cues) -> None:
+        self.onset = (cues.onset_left, cues.onset_right)
+        self.openings[0] += cues.onset_left
+        self.openings[1] += cues.onset_right
+        self.travelled_m += cues.step_m
+        self.turned_rad += cues.turn_rad
+
+
+@dataclass(frozen=True)
+class Landmark:
+    """A postcondition recognised from the robot's own sensors (see the module docstring)."""
+
+    kind: str  # "opening" or "turned"
+    side: str  # "left" or "right"
+    nth: int = 1
+    odometry_m: float | None = None
+    angle_rad: float = 0.0
+
+    def met(self, p: Progress) -> bool:
+        s = SIDES.index(self.side)
+        if self.kind == "opening":
+            return p.onset[s] and p.openings[s] >= self.nth
+        sign = 1.0 if self.side == "left" else -1.0
+        return sign * p.turned_rad >= self.angle_rad
+
+    def describe(self) -> str:
+        """One line a person reads: what the robot waits for."""
+        if self.kind == "opening":
+            nth = {1: "1st", 2: "2nd", 3: "3rd"}.get(self.nth, f"{self.nth}th")
+            odo = (
+                f" (the teacher met it after {self.odometry_m:.1f} m)" if self.odometry_m is not None else ""
+            )
+            return f"the {nth} opening on the {self.side}{odo}"
+        return f"turned {math.degrees(self.angle_rad):.0f}° to the {self.side}"
+
+    def to_dict(self) -> dict[str, Any]:
+        if self.kind == "opening":
+            d: dict[str, Any] = {"opening": self.side, "nth": self.nth}
+            if self.odometry_m is not None:
+                d["odometry_m"] = round(self.odometry_m, 2)
+            return d
+        return {"turned": self.side, "angle_rad": round(self.angle_rad, 3)}
+
+    @staticmethod
+    def from_dict(d: Any, where: str) -> Landmark:
+        if not isinstance(d, dict):
+            raise ConfigError(f"fusion table: {where} must be a mapping")
+        kinds = [k for k in ("opening", "turned") if k in d]
+        if len(kinds) != 1:
+            raise ConfigError(f"fusion table: {where}: give exactly one of 'opening' or 'turned'")
+        kind = kinds[0]
+        allowed = {"opening", "nth", "odometry_m"} if kind == "opening" else {"turned", "angle_rad"}
+        bad = sorted(set(d) - allowed)
+        if bad:
+            raise ConfigError(
+                f"fusion table: {where}: unknown field {bad[0]!r} (valid: {', '.join(sorted(allowed))})"
+            )
+        side = d[kind]
+        if side not in SIDES:
+            raise ConfigError(f"fusion table: {where}.{kind} must be 'left' or 'right'")
+        if kind == "opening":
+            nth = d.get("nth", 1)
+            if isinstance(nth, bool) or not isinstance(nth, int) or not 1 <= nth <= 1000:
+                raise ConfigError(f"fusion table: {where}.nth must be an integer in [1, 1000]")
+            odo = d.get("odometry_m")
+            if odo is not None and (
+                isinstance(odo, bool) or not isinstance(odo, (int, float)) or not 0 <= odo < 1e6
+            ):
+                raise ConfigError(f"fusion table: {where}.odometry_m must be a distance in metres")
+            return Landmark("opening", side, nth, None if odo is None else float(odo))
+        ang = d.get("angle_rad")
+        if isinstance(ang, bool) or not isinstance(ang, (int, float)) or not 0 < ang <= 2 * math.pi:
+            raise ConfigError(f"fusion table: {where}.angle_rad must be in (0, 2π]")
+        return Landmark("turned", side, angle_rad=float(ang))

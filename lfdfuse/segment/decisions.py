@@ -1,0 +1,198 @@
+"""Decision points: where the teacher left the route the learned fusion would have taken (issue 15).
+
+A goal segment's fusion weights reproduce *how* the teacher steered; they cannot know *where*
+the teacher turned off toward a goal still out of view. A decision point is found by replaying
+the segment's learned fusion over the demo: a run of steps where the demonstrated heading
+leaves the fused heading by more than ``divergence_rad`` to one side, while the teacher really
+turns that way, at an opening on that side. Each decision splits the goal segment into
+*drive on to the n-th opening on that side* | *turn into it* | *the rest*, with landmarks the
+robot recognises from its own sensors (:mod:`lfdfuse.behaviors.landmarks`): the order of the
+opening among those on that side since the sub-segment began, and the heading change.
+
+Step ``d`` (the opening's onset) is the first step of the turn, step ``e`` (the turn landmark
+met) the first step after it, exactly as the runtime switches steps.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from lfdfuse.behaviors.landmarks import (
+    SIDES,
+    OpeningParams,
+    odometry_increments,
+    opening_onsets,
+    side_openings,
+)
+from lfdfuse.segment.goals import GoalSegment
+from lfdfuse.sim.sensors import ScanGeometry
+
+
+@dataclass(frozen=True)
+class LandmarkTrack:
+    """Landmark cues of every demo step: ``onsets (N, 2)`` (left, right), odometry ``(N,)``,
+    and the scans ``(N, B)`` they came from."""
+
+    onsets: np.ndarray
+    step_m: np.ndarray
+    turn_rad: np.ndarray
+    ranges_m: np.ndarray
+    geometry: ScanGeometry
+    params: OpeningParams
+
+
+def landmark_track(
+    ranges_m: np.ndarray, geometry: ScanGeometry, pose: np.ndarray, params: OpeningParams = OpeningParams()
+) -> LandmarkTrack:
+    """Cues from scans ``(N, B)`` and odometry poses ``(N, 3)`` (only their increments are used)."""
+    step_m, turn = odometry_increments(pose)
+    onsets = opening_onsets(side_openings(ranges_m, geometry, params), turn, params)
+    return LandmarkTrack(onsets, step_m, turn, np.asarray(ranges_m), geometry, params)
+
+
+def _steady_onset(track: LandmarkTrack, side: int, lo: int, hi: int) -> int | None:
+    """The first onset on ``side`` in ``[lo, hi)`` with the sectors held at step ``lo``'s heading.
+
+    A teacher who knows the way starts to turn before the opening is abeam; the robot, driving
+    on with the style's weights, meets it abeam. Holding the sectors to the heading before the
+    turn finds the step where the robot will see it.
+    """
+    if hi <= lo:
+        return None
+    heading = np.cumsum(track.turn_rad[lo:hi]) - track.turn_rad[lo]
+    flags = side_openings(track.ranges_m[lo:hi], track.geometry, track.params, offset_rad=-heading)
+    onsets = opening_onsets(flags, np.zeros(hi - lo), track.params)
+    hit = np.nonzero(onsets[:, side])[0]
+    return lo + int(hit[0]) if len(hit) else None
+
+
+@dataclass(frozen=True)
+class DecisionParams:
+    divergence_rad: float = math.radians(15.0)  # demo vs fused heading (smoothed): a different way
+    smooth_steps: int = 5
+    min_steps: int = 4  # that long (control periods), gaps of up to ``max_gap`` allowed
+    min_area: float = 2.0  # and Σ|divergence| over the run (rad × steps) at least this
+    max_gap: int = 3
+    min_turn_rad: float = math.radians(45.0)  # the teacher really turned that way
+    lookback: int = 60  # the opening's onset at most this many steps before the divergence
+    lookahead: int = 20  # or this many steps after it (the teacher began to turn early)
+    turn_share: float = 0.8  # the turn landmark: this share of the teacher's turn
+    min_angle_rad: float = math.radians(40.0)
+    max_angle_rad: float = math.radians(150.0)
+
+
+@dataclass(frozen=True)
+class DecisionPoint:
+    """A turn-off in goal segment ``segment``: from step ``onset`` to step ``turn_end``."""
+
+    segment: int
+    side: str
+    onset: int
+    turn_end: int
+    nth: int  # the opening's order among onsets on that side since ``since``
+    since: int  # first step of the sub-segment the opening is counted in
+    odometry_m: float
+    angle_rad: float
+    divergence_rad: float  # mean |demo − fused| over the divergence: why it is a decision
+
+
+def _runs(mask: np.ndarray, sign: np.ndarray, max_gap: int) -> list[tuple[int, int, float]]:
+    """Runs ``(start, stop, side sign)`` of ``mask`` with one sign, bridging short gaps."""
+    out: list[tuple[int, int, float]] = []
+    idx = np.nonzero(mask)[0]
+    if not len(idx):
+        return out
+    a = b = int(idx[0])
+    s = float(sign[a])
+    for i in idx[1:].tolist():
+        if i - b <= max_gap + 1 and float(sign[i]) == s:
+            b = i
+            continue
+        out.append((a, b + 1, s))
+        a = b = i
+        s = float(sign[i])
+    out.append((a, b + 1, s))
+    return out
+
+
+def find_decisions(
+    *,
+    segments: tuple[GoalSegment, ...],
+    demo: np.ndarray,
+    informative: np.ndarray,
+    fused: np.ndarray,
+    track: LandmarkTrack,
+    params: DecisionParams = DecisionParams(),
+) -> list[DecisionPoint]:
+    """Decision points of the goal segments that end at a goal (a tour has no turn-off to learn).
+
+    ``demo (N, 2)`` demonstrated vectors, ``fused (N, 2)`` the segment's learned fusion
+    replayed on the same steps.
+    """
+    p = params
+    hd = np.arctan2(demo[:, 1], demo[:, 0])
+    hf = np.arctan2(fused[:, 1], fused[:, 0])
+    valid = informative & (np.hypot(fused[:, 0], fused[:, 1]) > 1e-9)
+    raw = np.where(valid, np.arctan2(np.sin(hd - hf), np.cos(hd - hf)), 0.0)
+    k = max(p.smooth_steps, 1)
+    err = np.convolve(raw, np.ones(k) / k, mode="same")
+    out: list[DecisionPoint] = []
+    for seg in segments:
+        if seg.goal is None:
+            continue
+        since = seg.start
+        lo, hi = seg.start, seg.stop
+        e = err[lo:hi]
+        mask = valid[lo:hi] & (np.abs(e) > p.divergence_rad)
+        for a, b, sgn in _runs(mask, np.sign(e), p.max_gap):
+            a, b = a + lo, b + lo
+            if b - a < p.min_steps or a < since or float(np.abs(e[a - lo : b - lo]).sum()) < p.min_area:
+                continue
+            s = 0 if sgn > 0 else 1
+            ref = max(a - p.lookback, since)
+            turned = sgn * np.cumsum(track.turn_rad[ref + 1 : min(b + 25, hi)])
+            if not len(turned) or turned.max() < p.min_turn_rad:
+                continue  # the teacher did not really turn that way
+            d = _steady_onset(track, s, ref, min(b + p.lookahead, hi))
+            if d is None:
+                continue  # no opening the robot could recognise: not expressible as a landmark
+            # the turn landmark, from the heading before the turn (the robot meets the opening
+            # driving on): this share of the teacher's largest turn toward the side
+            angle = float(np.clip(p.turn_share * turned.max(), p.min_angle_rad, p.max_angle_rad))
+            after = sgn * np.cumsum(track.turn_rad[d + 1 : min(b + 25, hi)])
+            before = sgn * float(track.turn_rad[ref + 1 : d + 1].sum())
+            reach = np.nonzero(before + after >= angle)[0]
+            if not len(reach):
+                continue
+            end = d + 1 + int(reach[0])
+            if end + 1 >= hi:
+                continue  # the goal came first: nothing left to steer after the turn
+            nth = int(track.onsets[since:d, s].sum()) + 1
+            odo = float(track.step_m[since : d + 1].sum())
+            div = float(np.abs(raw[a:b][valid[a:b]]).mean())
+            out.append(DecisionPoint(seg.index, SIDES[s], d, end, nth, since, odo, angle, div))
+            since = end
+    return out
+
+
+def split_segments(
+    segments: tuple[GoalSegment, ...], decisions: list[DecisionPoint]
+) -> list[tuple[int, GoalSegment]]:
+    """Sub-segments ``(original segment index, sub-segment)`` in time order; only the last
+    sub-segment of a goal segment keeps its goal. Indices are renumbered."""
+    out: list[tuple[int, GoalSegment]] = []
+    for seg in segments:
+        cuts = [(d.onset, d.turn_end) for d in decisions if d.segment == seg.index]
+        bounds = [seg.start]
+        for d, e in cuts:
+            bounds += [d, e]
+        bounds.append(seg.stop)
+        for j in range(len(bounds) - 1):
+            last = j == len(bounds) - 2
+            out.append(
+                (seg.index, GoalSegment(len(out), bounds[j], bounds[j + 1], seg.goal if last else None))
+            )
+    return out

@@ -1,0 +1,161 @@
+"""Goals off the style's route (issue 15): sub-goals at decision points, closed loop and unit laws.
+
+The full table (two buildings, the teacher's start and 10 perturbed starts, with and without
+sub-goals) is the ``offroute`` benchmark; here one building, two starts, and the pieces.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import jsonschema
+import numpy as np
+import pytest
+import yaml
+
+from lfdfuse.behaviors.landmarks import OpeningParams, opening_onsets, side_openings
+from lfdfuse.errors import ConfigError
+from lfdfuse.network.landmarks import Cues, Landmark, Progress
+from lfdfuse.network.runtime import NetworkRuntime
+from lfdfuse.network.table import dump_table, parse_table
+from lfdfuse.sim.sensors import LaserParams
+from lfdfuse.tools.bench_offroute import CASES, demonstrate, learn, perturbed_starts, run_starts
+from lfdfuse.world.model import load_world
+from tests.conftest import ROOT
+
+SCHEMA = json.loads((ROOT / "schemas" / "fusion-table.schema.json").read_text())
+
+
+def _table(landmark: dict) -> dict:  # type: ignore[type-arg]
+    return {
+        "format": "lfdfuse/fusion-table@1",
+        "behaviors": ["avoid", "wander_left", "wander_right", "attract_green"],
+        "default_weights": {"avoid": 1.0, "wander_left": 0.5, "wander_right": 0.5},
+        "network": {
+            "name": "t",
+            "steps": [
+                {
+                    "name": "reach-green",
+                    "goal": {"target": "green"},
+                    "network": {
+                        "name": "reach-green",
+                        "steps": [
+                            {"name": "to", "goal": None, "landmark": landmark, "fusion": []},
+                            {
+                                "name": "turn",
+                                "goal": None,
+                                "landmark": {"turned": "left", "angle_rad": 1.0},
+                                "fusion": [],
+                            },
+                            {"name": "reach-green", "goal": {"target": "green"}, "fusion": []},
+                        ],
+                    },
+                }
+            ],
+        },
+    }
+
+
+def test_landmark_steps_round_trip_and_match_the_schema() -> None:
+    data = _table({"opening": "left", "nth": 2, "odometry_m": 7.9})
+    jsonschema.validate(data, SCHEMA)
+    table = parse_table(data)
+    again = yaml.safe_load(dump_table(table))
+    jsonschema.validate(again, SCHEMA)
+    assert parse_table(again) == table
+    inner = table.network.steps[0].network
+    assert inner is not None and inner.steps[0].landmark == Landmark("opening", "left", 2, 7.9)
+    assert "2nd opening on the left" in inner.steps[0].landmark.describe()
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        {"opening": "up"},
+        {"opening": "left", "nth": 0},
+        {"opening": "left", "turned": "left"},
+        {"turned": "left", "angle_rad": -1},
+        {"opening": "left", "colour": "red"},
+        "left",
+    ],
+)
+def test_bad_landmarks_are_clear_errors(bad: object) -> None:
+    with pytest.raises(ConfigError, match="landmark"):
+        parse_table(_table(bad))  # type: ignore[arg-type]
+
+
+def test_runtime_walks_the_sub_goals_on_cues_alone() -> None:
+    table = parse_table(_table({"opening": "left", "nth": 2}))
+    rt = NetworkRuntime(table)
+    from lfdfuse.behaviors.primitives import BehaviorOutputs
+
+    out = BehaviorOutputs(
+        table.behaviors, np.zeros((1, 4, 2)), np.zeros((1, 4), bool), np.zeros((1, 4), bool)
+    )
+    names = []
+    for cue in [Cues(onset_right=True), Cues(onset_left=True), Cues(step_m=1.0), Cues(onset_left=True)]:
+        names.append(rt.decide(out, set(), cue).step.name)  # type: ignore[union-attr]
+    assert names == ["to", "to", "to", "turn"]  # the second left opening, not a right one
+    for _ in range(3):
+        names.append(rt.decide(out, set(), Cues(turn_rad=0.4)).step.name)  # type: ignore[union-attr]
+    assert names[-3:] == ["turn", "turn", "reach-green"]  # 1.2 rad ≥ 1.0 turned: on to the goal
+    assert rt.decide(out, {"green"}).step is None and rt.complete
+
+
+def test_reaching_the_goal_early_skips_its_sub_goals() -> None:
+    table = parse_table(_table({"opening": "left"}))
+    rt = NetworkRuntime(table)
+    from lfdfuse.behaviors.primitives import BehaviorOutputs
+
+    out = BehaviorOutputs(
+        table.behaviors, np.zeros((1, 4, 2)), np.zeros((1, 4), bool), np.zeros((1, 4), bool)
+    )
+    dec = rt.decide(out, {"green"})
+    assert dec.achieved_now == ("green",) and rt.complete
+
+
+def test_openings_are_seen_on_their_side_and_counted_once() -> None:
+    geom = LaserParams().geometry
+    corridor = np.full(geom.count, 1.2)
+    door = corridor.copy()
+    door[geom.angles > math.radians(50)] = 8.0  # the left side opens
+    scans = np.array([corridor] * 5 + [door] * 6 + [corridor] * 6 + [door] * 1 + [corridor] * 3)
+    flags = side_openings(scans, geom, OpeningParams())
+    assert flags[5:11, 0].all() and not flags[:, 1].any()
+    on = opening_onsets(flags, np.zeros(len(scans)))
+    assert on[:, 0].sum() == 1 and not on[:, 1].any()  # a one-scan flicker is no opening
+    turning = opening_onsets(flags, np.full(len(scans), math.radians(10)))
+    assert not turning.any()  # sectors swept while turning round are not junctions passed
+
+
+def test_progress_counts_per_side() -> None:
+    p = Progress.fresh()
+    p.add(Cues(onset_left=True, step_m=0.5, turn_rad=-0.1))
+    assert p.openings == [1, 0] and p.travelled_m == 0.5
+    assert Landmark("opening", "left").met(p) and not Landmark("opening", "right").met(p)
+    assert Landmark("turned", "right", angle_rad=0.05).met(p)
+
+
+@pytest.fixture(scope="module")
+def office(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, object]:
+    tmp = tmp_path_factory.mktemp("office")
+    return tmp, demonstrate(CASES["office-room"], folder=tmp)
+
+
+@pytest.mark.xfail(
+    reason="issue 15 is open: at run time the robot counts a corner as an opening the teacher, "
+    "turning early, did not (the n-th opening is met too soon); see the bench `offroute`",
+    strict=False,
+)
+def test_a_turn_into_an_office_off_the_route_is_reproduced(office: tuple[Path, Path]) -> None:
+    tmp, seg = office
+    case = CASES["office-room"]
+    table = learn(seg, subgoals=True)
+    inner = table.network.steps[1].network
+    assert inner is not None, "the turn into the office is a decision point"
+    assert inner.steps[0].landmark is not None and inner.steps[0].landmark.side == "right"
+    starts = perturbed_starts(load_world(case.world), 1, seed=15)
+    rows = run_starts(table, case, starts=starts, folder=tmp, label="sub")
+    assert all(r["completed"] and r["collisions"] == 0 for r in rows), rows
