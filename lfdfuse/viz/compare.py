@@ -152,6 +152,14 @@ def rows(
     quick: bool,
 ) -> Iterator[Row]:
     """The comparison rows, in the paper's order."""
+    yield Row(
+        "single wall-attract behaviour set",
+        "Sec. V-A Scenario 1; Fig. 5",
+        "with one undivided wallAttract the robot hugs the walls whatever the demonstrated style",
+        "not rerun by this report (it uses the scenario3 behaviour set throughout)",
+        None,
+        "By hand: `lfdfuse segment demo.mcap --behaviors scenario1`, then estimate and execute.",
+    )
     for style, fig in (
         ("keep-left", "Fig. 6 top left"),
         ("keep-center", "Fig. 6 top right"),
