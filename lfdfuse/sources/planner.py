@@ -25,8 +25,9 @@ from lfdfuse.world.model import World
 from lfdfuse.world.raycast import near_pairs
 
 _NEIGHBOURS = ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1))
-#: cost-to-go fields kept per planner (each is one float per cell)
+#: cost-to-go fields kept per planner (each is one float per cell): at most 64, and 20 M floats
 _FIELDS_KEPT = 64
+_FIELD_CELLS_KEPT = 20_000_000
 
 
 @dataclass(frozen=True)
@@ -128,7 +129,7 @@ class Planner:
         dist, _ = self._mcp.find_costs([goal])
         dist = np.where(self.free, dist, np.inf)
         dist.setflags(write=False)
-        if len(self._fields) >= _FIELDS_KEPT:
+        if len(self._fields) >= max(1, min(_FIELDS_KEPT, _FIELD_CELLS_KEPT // dist.size)):
             self._fields.pop(next(iter(self._fields)))
         self._fields[goal] = dist
         return dist

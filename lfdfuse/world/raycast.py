@@ -34,9 +34,11 @@ _CULL_MIN = 64
 #: cached per-cell band arrays, cleared when it grows past this many cells
 _CACHE_CELLS = 4096
 #: most (segment, cell) pairs examined at once while building the index
-_BUILD_CHUNK = 2_000_000
+_BUILD_CHUNK = 1_000_000
 #: most grid cells; a larger world gets larger cells
 _MAX_CELLS = 4_000_000
+#: most (segment, cell) pairs the index may examine; more segments get larger cells
+_MAX_PAIRS = 12_000_000
 
 
 def _point_segment_distance(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> np.ndarray:
@@ -225,6 +227,12 @@ class RayCaster:
             x1 = y1 = self.cell_m
         # any cell size gives the same results; a huge world gets coarser cells, not huge memory
         self.cell_m = max(self.cell_m, math.sqrt((x1 - self.x0) * (y1 - self.y0) / _MAX_CELLS))
+        span = np.abs(seg[:, 2:] - seg[:, :2]) + 2.0 * self.max_range_m
+        while True:
+            reach = span + 2.0 * self.cell_m * math.sqrt(0.5)
+            if float(np.prod(np.ceil(reach / self.cell_m) + 1.0, axis=1).sum()) <= _MAX_PAIRS:
+                break
+            self.cell_m *= 1.25
         self.nx = max(1, math.ceil((x1 - self.x0) / self.cell_m))
         self.ny = max(1, math.ceil((y1 - self.y0) / self.cell_m))
         self._build_index()
