@@ -4,7 +4,7 @@ PY := $(VENV)/bin/python
 LFD := $(VENV)/bin/lfdfuse
 DEMO := build/demo
 
-.PHONY: demo test lint bench sample-logs install clean paper
+.PHONY: demo test fuzz lint bench sample-logs install clean paper
 
 $(VENV)/.installed: pyproject.toml
 	test -x $(PY) || python3 -m venv $(VENV)
@@ -27,9 +27,14 @@ demo: install
 	$(LFD) estimate $(DEMO)/task.seg.mcap -o $(DEMO)/task.yaml
 	$(LFD) execute $(DEMO)/task.yaml --start 3.5,1.0,0.2 --max-time 300 -o $(DEMO)/task-run.mcap --report $(DEMO)/task-run.json
 	@echo "Open $(DEMO)/*-run.mcap in Foxglove or Lichtblick: map, robot, laser and the fusion arrows (/lfd/overlay)."
+	$(PY) -m lfdfuse.tools.demo_check $(DEMO)
 
 test: install
 	$(PY) -m pytest
+
+# the whole hostile corpus (tests/hostile; make test runs a sample of every class)
+fuzz: install
+	LFDFUSE_FUZZ=1 $(PY) -m pytest tests/hostile
 
 lint: install
 	$(VENV)/bin/ruff format --check lfdfuse tests

@@ -7,6 +7,7 @@ names the file and line.
 from __future__ import annotations
 
 import os
+import stat
 import tempfile
 from pathlib import Path
 from typing import Any
@@ -46,21 +47,96 @@ def write_text_atomic(path: str | Path, text: str) -> None:
             os.unlink(tmp)
 
 
-def parse_yaml(text: str, *, origin: str) -> Any:
-    """YAML text into data; a syntax error names the file and line."""
+#: a YAML file we parse is at most this big (a world of ~100,000 points is ~3 MB; parsing
+#: YAML runs at a few MB/s, so this also bounds the time)
+MAX_CONFIG_BYTES = 4 * 2**20
+#: deepest nesting of a YAML document (a world's walls are 4 deep, a table's nested networks ~3 per level)
+MAX_YAML_DEPTH = 64
+#: most nodes of a YAML document once its aliases are expanded (an anchor bomb is billions)
+MAX_YAML_NODES = 1_000_000
+
+
+# libyaml's parser is ~20x faster than PyYAML's and refuses nesting past 1000 levels itself
+_Loader: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
+def _measure(root: yaml.Node, origin: str, error: type[LfdError]) -> None:
+    """Refuse documents nested too deep or too big once aliases are expanded (an anchor bomb),
+    walking the composed node graph iteratively with each shared (aliased) node sized once."""
+    size: dict[int, int] = {}
+    stack: list[tuple[yaml.Node, int, bool]] = [(root, 1, False)]
+    while stack:
+        node, depth, done = stack.pop()
+        if depth > MAX_YAML_DEPTH:
+            raise error(f"{origin}: YAML nested deeper than {MAX_YAML_DEPTH} levels")
+        if isinstance(node, yaml.SequenceNode):
+            children = list(node.value)
+        elif isinstance(node, yaml.MappingNode):
+            children = [c for kv in node.value for c in kv]
+        else:
+            size[id(node)] = 1
+            continue
+        if done:
+            size[id(node)] = min(1 + sum(size[id(c)] for c in children), MAX_YAML_NODES + 1)
+            continue
+        if id(node) in size:
+            continue
+        size[id(node)] = 0  # in progress: a recursive alias counts as nothing more
+        stack.append((node, depth, True))
+        for c in children:
+            if size.get(id(c)) == 0:  # an alias to a node still being walked: its own ancestor
+                raise error(f"{origin}: a YAML alias refers to itself (a recursive document)")
+            if id(c) not in size:
+                stack.append((c, depth + 1, False))
+    if size[id(root)] > MAX_YAML_NODES:
+        raise error(f"{origin}: too many YAML nodes once aliases are expanded (an anchor bomb?)")
+
+
+def parse_yaml(text: str, *, origin: str, error: type[LfdError] = ConfigError) -> Any:
+    """YAML text into data, within size, depth and alias-expansion limits; errors name the file and line."""
+    if len(text) > MAX_CONFIG_BYTES:
+        raise error(f"{origin}: larger than {MAX_CONFIG_BYTES // 2**20} MB")
+    loader = None
     try:
-        return yaml.safe_load(text)
+        loader = _Loader(text)
+        root = loader.get_single_node()
+        if root is None:
+            return None
+        _measure(root, origin, error)
+        return loader.construct_document(root)
+    except RecursionError:
+        raise error(f"{origin}: YAML nested too deeply") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""
-        raise ConfigError(f"{origin}: malformed YAML{where}") from exc
+        problem = getattr(exc, "problem", None) or getattr(exc, "reason", None)
+        raise error(f"{origin}: malformed YAML{where}" + (f" ({problem})" if problem else "")) from exc
+    finally:
+        if loader is not None:
+            loader.dispose()
 
 
-def read_yaml(path: str | Path, *, what: str) -> Any:
-    """Read and parse a YAML file; ``what`` names it in errors ("task file", "fusion table")."""
+def read_text(path: str | Path, *, what: str, error: type[LfdError] = ConfigError) -> str:
+    """A user's text file, refused before reading when it is not a regular file or too big."""
     p = Path(path)
     try:
-        text = p.read_text()
+        st = p.stat()
     except OSError as exc:
-        raise ConfigError(f"cannot read {what} {p}: {exc.strerror}") from exc
-    return parse_yaml(text, origin=str(p))
+        raise error(f"cannot read {what} {p}: {exc.strerror}") from exc
+    if not stat.S_ISREG(st.st_mode):
+        raise error(f"cannot read {what} {p}: not a regular file")
+    if st.st_size > MAX_CONFIG_BYTES:
+        raise error(f"{what} {p} is larger than {MAX_CONFIG_BYTES // 2**20} MB")
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise error(f"cannot read {what} {p}: {exc.strerror}") from exc
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise error(f"{what} {p} is not a text file (not UTF-8 at byte {exc.start})") from None
+
+
+def read_yaml(path: str | Path, *, what: str, error: type[LfdError] = ConfigError) -> Any:
+    """Read and parse a YAML file; ``what`` names it in errors ("task file", "fusion table")."""
+    return parse_yaml(read_text(path, what=what, error=error), origin=str(path), error=error)

@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from lfdfuse.cli.app import app
-from lfdfuse.cli.common import console, progress_bar, user_errors
+from lfdfuse.cli.common import check_count, check_outputs, check_seed, console, progress_bar, user_errors
 from lfdfuse.cli.render import print_table
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.paper import PFParams
@@ -56,6 +56,10 @@ def estimate_cmd(
         raise ConfigError(f"unknown method {method!r} (valid: {', '.join(METHODS)})")
     if likelihood not in ("vonmises", "paper"):
         raise ConfigError(f"unknown likelihood {likelihood!r} (valid: vonmises, paper)")
+    check_count("--particles", particles, maximum=100_000)
+    check_count("--trials", trials, maximum=1000)
+    check_seed(seed)
+    check_outputs([out], [src])
     pf = replace(PFParams(), particles=particles, likelihood=likelihood)  # type: ignore[arg-type]
     smc = replace(SMCParams(), particles=particles)
     opts = EstimateOptions(method=method, trials=trials, seed=seed, pf=pf, smc=smc)  # type: ignore[arg-type]

@@ -7,7 +7,15 @@ from pathlib import Path
 import typer
 
 from lfdfuse.cli.app import WORLD_HELP, app
-from lfdfuse.cli.common import progress_bar, user_errors
+from lfdfuse.cli.common import (
+    check_amount,
+    check_duration,
+    check_outputs,
+    check_seed,
+    existing,
+    progress_bar,
+    user_errors,
+)
 from lfdfuse.cli.render import print_report
 from lfdfuse.execute.report import write_report
 from lfdfuse.execute.run import ExecuteOptions, drive_table
@@ -47,9 +55,13 @@ def execute_cmd(
       lfdfuse execute fusion.yaml --world building -o run.mcap --report run.json
       lfdfuse execute fusion.yaml --world tee --start 1,9,0 --max-time 120
     """
+    check_duration("--max-time", max_time)
+    check_seed(seed)
+    check_amount("--sensor-noise", noise, maximum=1.0, unit="m")
+    check_outputs([out, report], [table, existing(world)])
     w = load_world(world)
     tab = load_table(table)
-    pose = Pose.parse(start) if start else None
+    pose = Pose.parse(start) if start is not None else None
     opts = ExecuteOptions(
         world=w,
         table=tab,

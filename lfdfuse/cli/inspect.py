@@ -10,18 +10,34 @@ from rich.table import Table
 
 from lfdfuse.cli.app import app
 from lfdfuse.cli.common import console, user_errors
-from lfdfuse.cli.render import print_segments
+from lfdfuse.cli.render import print_segments, print_subgoals, print_table
+from lfdfuse.errors import ConfigError
+from lfdfuse.files import read_yaml
+from lfdfuse.log.messages import PROVENANCE
 from lfdfuse.log.reader import file_info
+from lfdfuse.network.table import load_table
 from lfdfuse.segment.read import read_segmented, segmentation_of
+from lfdfuse.sources.tasks import load_task
+from lfdfuse.world.model import load_world
 
 
 @app.command()
 @user_errors
-def inspect(file: Path = typer.Argument(..., help="Any MCAP file: an lfdfuse log or a ROS 2 bag.")) -> None:
-    """Print the channels, message counts, duration and metadata of an MCAP file.
+def inspect(
+    file: Path = typer.Argument(
+        ..., help="An MCAP file (an lfdfuse log or a ROS 2 bag), or a world, task or table YAML."
+    ),
+) -> None:
+    """Summarise a file: an MCAP's channels, message counts, duration and provenance; a world's
+    walls, targets and start; a task's legs; a fusion table's network.
 
-    Example: lfdfuse inspect demo.mcap
+    Examples:
+      lfdfuse inspect demo.mcap
+      lfdfuse inspect fusion.yaml
     """
+    if file.suffix in (".yaml", ".yml"):
+        _inspect_yaml(file)
+        return
     info = file_info(file)
     dur = (info.end_ns - info.start_ns) / 1e9 if info.end_ns else 0.0
     console.print(f"[bold]{file}[/bold]  ({info.library or 'unknown writer'})")
@@ -35,13 +51,55 @@ def inspect(file: Path = typer.Argument(..., help="Any MCAP file: an lfdfuse log
         table.add_row(topic, schema, enc, str(count))
     console.print(table)
     for name, data in info.metadata.items():
-        console.print(
-            f"  metadata [bold]{name}[/bold]: " + ", ".join(f"{k}={v}" for k, v in data.items()), markup=True
-        )
+        if name == PROVENANCE:
+            console.print(
+                f"  metadata [bold]{name}[/bold]: " + ", ".join(f"{k}={_short(v)}" for k, v in data.items())
+            )
+        else:
+            # a foreign record (rosbag2's is a whole YAML document): its keys, not its contents
+            keys = ", ".join(_short(k, 30) for k in list(data)[:8]) + (", …" if len(data) > 8 else "")
+            console.print(f"  metadata [bold]{_short(name, 40)}[/bold]: {len(data)} key(s) ({keys})")
+    if PROVENANCE not in info.metadata:
+        console.print("  not written by lfdfuse: run `lfdfuse import` on it to get a demo")
     if info.attachments:
-        console.print(f"  attachments: {', '.join(info.attachments)}")
+        console.print(f"  attachments: {', '.join(_short(a, 40) for a in info.attachments)}")
     if "/lfd/segment" in info.channels and "/lfd/behaviors" in info.channels:
         seg = read_segmented(file)
         dt = float(np.median(np.diff(seg.t_ns))) / 1e9 if len(seg.t_ns) > 1 else 0.1
         console.print(f"  segmented with: {', '.join(seg.names)}")
         print_segments(segmentation_of(seg), seg.names, dt)
+
+
+def _short(value: object, width: int = 60) -> str:
+    """One line of at most ``width`` characters."""
+    text = " ".join(str(value).split())
+    return text if len(text) <= width else text[: width - 1] + "…"
+
+
+def _inspect_yaml(file: Path) -> None:
+    data = read_yaml(file, what="file")
+    if isinstance(data, dict) and "format" in data:
+        table = load_table(file)
+        console.print(f"[bold]{file}[/bold]  fusion table, {len(table.behaviors)} behaviours")
+        print_table(table)
+        if any(s.network is not None for s in table.network.steps):
+            print_subgoals(table)  # sub-goals at decision points, in words (issue 15)
+    elif isinstance(data, dict) and set(data) == {"task"}:
+        legs = load_task(str(file))
+        console.print(f"[bold]{file}[/bold]  task of {len(legs)} leg(s)")
+        for i, leg in enumerate(legs):
+            console.print(
+                f"  {i + 1}. {'reach ' + leg.target if leg.target else 'tour'} in style {leg.style}"
+            )
+    elif isinstance(data, dict):
+        w = load_world(str(file))
+        x0, y0, x1, y1 = w.bounds()
+        console.print(f"[bold]{file}[/bold]  world {w.name!r}: {x1 - x0:.1f} m x {y1 - y0:.1f} m")
+        console.print(
+            f"  {len(w.walls)} wall polylines, {len(w.obstacles)} obstacles, {len(w.segments)} segments"
+        )
+        targets = ", ".join(f"{t.name} ({t.x:g}, {t.y:g})" for t in w.targets) or "none"
+        console.print(f"  targets: {targets}")
+        console.print(f"  start: ({w.start[0]:g}, {w.start[1]:g}, {w.start[2]:g})")
+    else:
+        raise ConfigError(f"{file}: not a world, task or fusion table")

@@ -33,8 +33,8 @@ def print_segments(segm: Segmentation, names: tuple[str, ...], dt: float) -> Non
         console.print(
             f"  [bold]segment {seg.index}[/bold] → {goal}: {steps * dt:.1f} s, {steps} steps, {len(bacs)} BACs"
         )
-        cells = [f"{b} ({n})" for b, n, _ in bacs]
-        console.print("    BAC (samples): " + ", ".join(cells), soft_wrap=False)
+        cells = [f"{b}={bac_names(b, names)} ({n})" for b, n, _ in bacs]
+        console.print("    BAC (samples): " + ", ".join(cells))
 
 
 _SHORT = {
@@ -57,10 +57,17 @@ def _abbrev(name: str) -> str:
     return _SHORT.get(name, name.replace("attract_", ""))
 
 
+def bac_names(bac: int, names: tuple[str, ...] | list[str]) -> str:
+    """A BAC in words: the abbreviations of its applicable behaviours (bit i ⇔ ``names[i]``), ``+``-joined."""
+    on = [_abbrev(n) for i, n in enumerate(names) if int(bac) >> i & 1]
+    return "+".join(on) or "none"
+
+
 def print_table(table: FusionTable) -> None:
     """Weights (± std), samples and fit error per step and BAC, in percent to fit a terminal."""
     legend = ", ".join(f"{_abbrev(b)}={b}" for b in table.behaviors)
     console.print(
+        "BAC = the set of applicable behaviours (bit i = the i-th below; a blank weight: not applicable); "
         "weights and std in % of the row; n = samples (* = too few to trust); fit° = mean heading error;"
         f" BAC? = not identifiable (the prior decides)\n{legend}"
     )
@@ -68,6 +75,8 @@ def print_table(table: FusionTable) -> None:
     def walk(net: Network, depth: int) -> None:
         for step in net.steps:
             goal = f"goal {step.goal}" if step.goal else "no goal"
+            if step.landmark is not None:  # a sub-goal at a decision point (issue 15)
+                goal = f"sub-goal: until {step.landmark.describe()}"
             console.print(f"{'  ' * depth}[bold]{step.name}[/bold] ({goal})")
             if step.network is not None:
                 walk(step.network, depth + 1)
@@ -99,8 +108,33 @@ def print_table(table: FusionTable) -> None:
     walk(table.network, 0)
 
 
+def print_subgoals(table: FusionTable) -> None:
+    """Explain the sub-goals at decision points (issue 15): where the network turns off its route."""
+    for step in table.network.steps:
+        inner = step.network
+        if inner is None or not any(s.landmark is not None for s in inner.steps):
+            continue
+        parts = []
+        for s in inner.steps:
+            lm = s.landmark
+            if lm is None:
+                parts.append(f"reach {s.goal}" if s.goal else s.name)
+            elif lm.kind == "opening":
+                parts.append(f"drive on to {lm.describe()}")
+            else:
+                parts.append(f"turn into it ({lm.describe()})")
+        console.print(f"  [bold]{step.name}[/bold]: " + ", then ".join(parts))
+    console.print(
+        "  (sub-goals mark where the teacher turned off toward a goal still out of view; openings are"
+        " counted from the robot's own scan since the step began, turns from its odometry)"
+    )
+
+
 def print_report(rep: dict[str, Any], *, out: str) -> None:
-    status = "task completed" if rep["completed"] else "task not completed"
+    if rep["completed"] is None:
+        status = "a network without goals (nothing to complete) ran"
+    else:
+        status = "task completed" if rep["completed"] else "task not completed"
     console.print(
         f"[bold]execute[/bold] → {out}: {status} in {rep['duration_s']:.1f} s, {rep['path_length_m']:.1f} m, {rep['collisions']} collisions"
     )

@@ -9,7 +9,7 @@ import typer
 
 from lfdfuse.behaviors.primitives import DEFAULT_PRESET, PRESETS
 from lfdfuse.cli.app import app, default_out
-from lfdfuse.cli.common import console, progress_bar, user_errors
+from lfdfuse.cli.common import check_outputs, console, progress_bar, user_errors
 from lfdfuse.cli.render import print_segments
 from lfdfuse.segment.pipeline import segment_file
 
@@ -42,6 +42,7 @@ def segment_cmd(
       lfdfuse segment demo.mcap --lag 0.3
     """
     target = out or default_out(src, ".seg")
+    check_outputs([target], [src])
     with progress_bar("segment"):
         res = segment_file(src, out=target, behaviors=behaviors, lag_s=lag)
     console.print(f"[bold]segment[/bold] {src} → {res.out}")

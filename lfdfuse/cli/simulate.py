@@ -7,12 +7,20 @@ from dataclasses import replace
 from pathlib import Path
 
 import typer
-import yaml
 
 from lfdfuse.cli.app import WORLD_HELP, app
-from lfdfuse.cli.common import progress_bar, user_errors
+from lfdfuse.cli.common import (
+    check_amount,
+    check_duration,
+    check_outputs,
+    check_seed,
+    existing,
+    progress_bar,
+    user_errors,
+)
 from lfdfuse.cli.render import print_run
 from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.files import read_yaml
 from lfdfuse.network.table import load_table
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sources.simulate import SimulateOptions, simulate
@@ -57,9 +65,15 @@ def simulate_cmd(
       lfdfuse simulate --world building --teacher task.yaml --seed 3 -o task.mcap
       lfdfuse simulate --world building --teacher fusion.yaml --heading-noise 5 -o truth.mcap
     """
+    check_duration("--duration", duration)
+    check_seed(seed)
+    check_amount("--sensor-noise", noise, maximum=1.0, unit="m")
+    if heading_noise is not None:
+        check_amount("--heading-noise", heading_noise, maximum=180.0, unit="degrees")
+    check_outputs([out], [existing(world), existing(teacher)])
     w = load_world(world)
-    pose = Pose.parse(start) if start else None
-    if teacher.endswith((".yaml", ".yml")) or Path(teacher).is_file():
+    pose = Pose.parse(start) if start is not None else None
+    if teacher.endswith((".yaml", ".yml")) or existing(teacher):
         if is_fusion_table(Path(teacher)):
             tab = load_table(Path(teacher))
             eopts = ExecuteOptions(
@@ -101,8 +115,5 @@ def simulate_cmd(
 
 def is_fusion_table(path: Path) -> bool:
     """A YAML whose top level has ``format:`` is a fusion table (a network teacher)."""
-    try:
-        data = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError):
-        return False
+    data = read_yaml(path, what="teacher file")
     return isinstance(data, dict) and "format" in data

@@ -87,6 +87,14 @@ def corridor_style(left_m: np.ndarray, right_m: np.ndarray, *, sight_m: float = 
     return "centre"
 
 
+def _style_words(step: dict[str, Any]) -> str:
+    """``step free (no goal) keeps the wall on its left`` — what a step's corridor style means."""
+    style = step.get("style", "unknown")
+    side = {"left": "keeps the wall on its left", "right": "keeps the wall on its right"}
+    words = side.get(style, "keeps to the centre" if style in ("center", "centre") else f"keeps {style}")
+    return f"step {step['name']} {words}"
+
+
 def verdict(report: dict[str, Any]) -> str:
     """One line: task completed (when it has goals) and the style of each step."""
     parts = []
@@ -95,7 +103,7 @@ def verdict(report: dict[str, Any]) -> str:
         parts.append(
             f"task {'completed' if report['completed'] else 'NOT completed'} ({done}/{len(report['goals'])} goals)"
         )
-    styles = [f"{s['name']} keeps {s.get('style', 'unknown')}" for s in report["steps"]]
+    styles = [_style_words(s) for s in report["steps"]]
     parts.append("; ".join(styles) if styles else "no step ran")
     parts.append(f"{report['collisions']} collisions")
     return ", ".join(parts)

@@ -9,23 +9,35 @@ and are kept out of estimation. All time arithmetic is in int64 nanoseconds.
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
-import yaml
 
 from lfdfuse.behaviors.primitives import Observations
 from lfdfuse.control.drive import DriveParams, command_to_vector
-from lfdfuse.errors import LogError
+from lfdfuse.errors import LfdError, LogError
+from lfdfuse.files import parse_yaml
 from lfdfuse.log.reader import Run, hold
+
+#: a target name a world may give (as in the world schema)
+TARGET_NAME = re.compile(r"[A-Za-z0-9_]{1,64}")
 
 
 def target_names_of(run: Run) -> list[str]:
     """Targets of the run's world (attached world file), else those the camera ever saw."""
     if run.world_yaml:
-        data = yaml.safe_load(run.world_yaml) or {}
-        names = [str(t["name"]) for t in data.get("targets") or [] if isinstance(t, dict) and "name" in t]
+        try:
+            data = parse_yaml(run.world_yaml, origin="the attached world.yaml")
+        except LfdError:
+            data = None  # the attachment is only a hint: a broken one is ignored
+        targets = data.get("targets") if isinstance(data, dict) else None
+        names = [
+            t["name"]
+            for t in (targets if isinstance(targets, list) else [])
+            if isinstance(t, dict) and isinstance(t.get("name"), str) and TARGET_NAME.fullmatch(t["name"])
+        ]
         if names:
-            return names
+            return list(dict.fromkeys(names))
     seen: list[str] = []
     for dets in run.detections:
         for d in dets:

@@ -9,6 +9,7 @@ with ``/lfd/behaviors``, ``/lfd/demo``, ``/lfd/bac`` and ``/lfd/segment`` interl
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -19,13 +20,14 @@ from lfdfuse.behaviors.primitives import (
     DEFAULT_PRESET,
     BehaviorOutputs,
     BehaviorParams,
+    Observations,
     compute,
     resolve_behaviors,
 )
 from lfdfuse.control.drive import DriveParams
 from lfdfuse.errors import LogError
 from lfdfuse.log import lfd
-from lfdfuse.log.reader import iter_attachments, iter_raw, read_run
+from lfdfuse.log.reader import check_log_file, iter_attachments, iter_raw, meta_float, read_run
 from lfdfuse.log.writer import LogWriter
 from lfdfuse.segment.demo import demonstrated, lag_ns_of, observations_of
 from lfdfuse.segment.goals import Segmentation, segment_outputs
@@ -60,6 +62,9 @@ def segment_file(
     log's provenance (``v_max_mps``, ``omega_max_rps``: an imported robot's own), else the
     simulated robot's.
     """
+    check_log_file(src)
+    if Path(out).resolve() == Path(src).resolve():
+        raise LogError(f"the output {out} would overwrite the input: give another -o")
     require_lfdfuse_log(src)
     run = read_run(src)
     if drive is None:
@@ -69,14 +74,12 @@ def segment_file(
     obs = observations_of(run)
     names = resolve_behaviors(behaviors, obs.target_names)
     if params is None:
-        reach = float(run.metadata.get("camera_reach_m", BehaviorParams().reach_m))
+        reach = meta_float(run.metadata, "camera_reach_m", BehaviorParams().reach_m)
         params = BehaviorParams(reach_m=reach)
-    outputs = compute(obs, names, params)
+    outputs = compute_in_chunks(obs, names, params)
     segm = segment_outputs(outputs)
     lag_ns = lag_ns_of(lag_s)
     vr, ok = demonstrated(run, drive, lag_ns=lag_ns)
-    if Path(out).resolve() == Path(src).resolve():
-        raise LogError("the output must not overwrite the input")
     meta = dict(run.metadata)
     meta.update(
         {
@@ -89,16 +92,18 @@ def segment_file(
     with LogWriter(out, metadata=meta, topics=dict(lfd.SEGMENT_TOPICS)) as log:
         for name, media, data in iter_attachments(src):
             log.attach(name, media, data)
+        # encoded lazily (a list of every message would grow with the log)
         lfd_msgs = _lfd_messages(run.t_ns, outputs, segm, vr, ok)
-        k = 0
+        pending = next(lfd_msgs, None)
         # copy every input channel (but our own, which we replace) interleaved in time order
         for raw in iter_raw(src, exclude_prefix="/lfd/"):
-            while k < len(lfd_msgs) and lfd_msgs[k][1] < raw.log_time_ns:
-                log.write_raw(*lfd_msgs[k])
-                k += 1
+            while pending is not None and pending[1] < raw.log_time_ns:
+                log.write_raw(*pending)
+                pending = next(lfd_msgs, None)
             log.copy(raw)
-        for item in lfd_msgs[k:]:
-            log.write_raw(*item)
+        while pending is not None:
+            log.write_raw(*pending)
+            pending = next(lfd_msgs, None)
     fits = tuple(lag_fits(run, outputs, drive)) if measure_lag else ()
     return SegmentResult(tuple(names), segm, run.t_ns, ok, str(out), lag_s, fits)
 
@@ -116,21 +121,44 @@ def drive_params_of(metadata: dict[str, str]) -> DriveParams:
     return replace(base, v_max_mps=v, omega_max_rps=w)
 
 
+def compute_in_chunks(
+    obs: Observations, names: list[str] | tuple[str, ...], params: BehaviorParams, *, rows: int = 2048
+) -> BehaviorOutputs:
+    """:func:`compute` over a whole log a block of scans at a time: the same result (the primitives
+    are per scan), with temporaries of ``rows × beams`` instead of ``N × beams``."""
+    n = len(obs.ranges_m)
+    if n <= rows:
+        return compute(obs, names, params)
+    parts = [compute(_rows_of(obs, a, min(a + rows, n)), names, params) for a in range(0, n, rows)]
+    return BehaviorOutputs(
+        parts[0].names,
+        np.concatenate([p.vectors for p in parts]),
+        np.concatenate([p.applicable for p in parts]),
+        np.concatenate([p.goal_met for p in parts]),
+    )
+
+
+def _rows_of(obs: Observations, a: int, b: int) -> Observations:
+    return replace(
+        obs,
+        ranges_m=obs.ranges_m[a:b],
+        sonar_m=None if obs.sonar_m is None else obs.sonar_m[a:b],
+        target_bearing_rad=obs.target_bearing_rad[a:b],
+        target_range_m=obs.target_range_m[a:b],
+    )
+
+
 def _lfd_messages(
     t_ns: np.ndarray, outputs: BehaviorOutputs, segm: Segmentation, vr: np.ndarray, ok: np.ndarray
-) -> list[tuple[str, int, bytes]]:
+) -> Iterator[tuple[str, int, bytes]]:
     names = outputs.names
     seg_goal = {s.index: (s.goal, s.target) for s in segm.segments}
-    out: list[tuple[str, int, bytes]] = []
     vec = np.round(outputs.vectors, 6)
     for i, t in enumerate(t_ns.tolist()):
         app = outputs.applicable[i]
         s = int(segm.segment_of[i])
         g, tg = seg_goal[s]
-        out.append(("/lfd/behaviors", t, lfd.encode_behaviors(t, names, vec[i], app, outputs.goal_met[i])))
-        out.append(("/lfd/demo", t, lfd.encode_demo(t, float(vr[i, 0]), float(vr[i, 1]), bool(ok[i]))))
-        out.append(
-            ("/lfd/bac", t, lfd.encode_bac(t, int(segm.bac[i]), [n for j, n in enumerate(names) if app[j]]))
-        )
-        out.append(("/lfd/segment", t, lfd.encode_segment(t, s, g, tg)))
-    return out
+        yield ("/lfd/behaviors", t, lfd.encode_behaviors(t, names, vec[i], app, outputs.goal_met[i]))
+        yield ("/lfd/demo", t, lfd.encode_demo(t, float(vr[i, 0]), float(vr[i, 1]), bool(ok[i])))
+        yield ("/lfd/bac", t, lfd.encode_bac(t, int(segm.bac[i]), [n for j, n in enumerate(names) if app[j]]))
+        yield ("/lfd/segment", t, lfd.encode_segment(t, s, g, tg))

@@ -7,6 +7,7 @@ from typing import Any
 
 from lfdfuse.errors import ConfigError
 from lfdfuse.files import read_yaml
+from lfdfuse.validate import validate
 
 STYLES = ("keep-left", "keep-center", "keep-right", "slalom", "pass-left", "pass-right")
 
@@ -45,6 +46,7 @@ def parse_task(data: Any, *, origin: str) -> list[Leg]:
             raise ConfigError(f"{origin}: task[{i}] needs a 'style'")
         target = leg.get("target")
         out.append(Leg(None if target is None else str(target), parse_style(str(leg["style"]))))
+    validate(data, "task", origin=origin)  # what the checks above leave: types, names, sizes
     return out
 
 

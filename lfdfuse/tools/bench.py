@@ -26,6 +26,7 @@ SUITES = {
     "world": "lfdfuse.tools.bench_world",
     "estimate": "lfdfuse.tools.bench_estimate",
     "offroute": "lfdfuse.tools.bench_offroute",
+    "memory": "lfdfuse.tools.bench_memory",
 }
 
 app = typer.Typer(add_completion=False, pretty_exceptions_enable=False)

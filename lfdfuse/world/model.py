@@ -15,10 +15,11 @@ from typing import Any
 
 import numpy as np
 import shapely
-import yaml
 from shapely.geometry import LineString, MultiLineString, Point, Polygon
 
 from lfdfuse.errors import WorldError
+from lfdfuse.files import parse_yaml, read_text
+from lfdfuse.validate import validate
 
 #: Circles become regular polygons with this many sides for the laser and collisions.
 CIRCLE_SIDES = 32
@@ -136,6 +137,13 @@ def parse_world(data: Any, *, source: str = "", origin: str = "world") -> World:
     """Validate a world mapping (as loaded from YAML) into a :class:`World`."""
     if not isinstance(data, dict):
         raise WorldError(f"{origin}: a world must be a mapping with 'walls' and 'start'")
+    walls_in = data.get("walls")
+    if (
+        isinstance(walls_in, list)
+        and sum(len(w) if isinstance(w, list) else 1 for w in walls_in) > MAX_SEGMENTS
+    ):
+        raise WorldError(f"{origin}: more than {MAX_SEGMENTS} wall points")  # before the slower checks
+    validate(data, "world", origin=origin, error=WorldError)
     unknown = sorted(set(data) - _WORLD_KEYS)
     if unknown:
         raise WorldError(
@@ -199,6 +207,7 @@ def parse_world(data: Any, *, source: str = "", origin: str = "world") -> World:
     if not isinstance(start, list) or len(start) != 3:
         raise WorldError(f"{origin}: 'start' must be [x, y, theta]")
     sx, sy, sth = (_num(v, "start") for v in start)
+    _check_size(walls, obstacles, targets, origin)
     segments = _segments_from(walls, obstacles)
     world = World(
         name=name,
@@ -212,6 +221,41 @@ def parse_world(data: Any, *, source: str = "", origin: str = "world") -> World:
     )
     check_pose_free(world, (sx, sy, sth), what="start pose")
     return world
+
+
+#: most wall and obstacle segments of a world (occupancy maps give thousands; a million is an error)
+MAX_SEGMENTS = 200_000
+#: largest side (m) of a world's bounding box: the planner's and raycaster's grids cover it
+MAX_EXTENT_M = 500.0
+
+
+def _check_size(
+    walls: list[list[tuple[float, float]]], obstacles: list[Obstacle], targets: list[Target], origin: str
+) -> None:
+    """Refuse worlds too big to plan or cast in, before any grid is allocated for them."""
+    n = sum(len(w) - 1 for w in walls) + CIRCLE_SIDES * len(obstacles)
+    if n > MAX_SEGMENTS:
+        raise WorldError(f"{origin}: {n} wall segments, more than the {MAX_SEGMENTS} a world may have")
+    xs = [p[0] for w in walls for p in w]
+    ys = [p[1] for w in walls for p in w]
+    for ob in obstacles:
+        if ob.circle is not None:
+            x, y, r = ob.circle
+            xs += [x - r, x + r]
+            ys += [y - r, y + r]
+        else:
+            xs += [p[0] for p in ob.points]
+            ys += [p[1] for p in ob.points]
+    w, h = max(xs) - min(xs), max(ys) - min(ys)
+    if max(w, h) > MAX_EXTENT_M:
+        raise WorldError(
+            f"{origin}: the world spans {w:.4g} m x {h:.4g} m; at most {MAX_EXTENT_M:g} m a side is supported"
+        )
+    if max(w, h) < 0.5:
+        raise WorldError(f"{origin}: the world spans {w:.2g} m x {h:.2g} m: too small for a robot")
+    for t in targets:
+        if not (min(xs) - 1 <= t.x <= max(xs) + 1 and min(ys) - 1 <= t.y <= max(ys) + 1):
+            raise WorldError(f"{origin}: target {t.name!r} at ({t.x:g}, {t.y:g}) is outside the map")
 
 
 def check_pose_free(
@@ -242,31 +286,30 @@ def builtin_names() -> list[str]:
 DEFAULT_WORLD = "building"
 
 
+def _exists(path: Path) -> bool:
+    try:
+        return path.exists()
+    except OSError:  # a name too long for a file: not a path to one
+        return False
+
+
 def load_world(name_or_path: str | None) -> World:
     """Load a built-in world by name, or a world YAML or a map_server map YAML by path."""
-    spec = name_or_path or DEFAULT_WORLD
+    spec = DEFAULT_WORLD if name_or_path is None else name_or_path
     if spec in builtin_names():
         text = (resources.files("lfdfuse") / "world" / "builtin" / f"{spec}.yaml").read_text()
         origin = spec
     else:
         path = Path(spec)
-        if not (spec.endswith((".yaml", ".yml")) or path.exists()):
+        if not spec.strip():
+            raise WorldError("the world is empty: give a built-in world name or a YAML path")
+        if not (spec.endswith((".yaml", ".yml")) or _exists(path)):
             raise WorldError(
                 f"unknown world {spec!r} (built-in worlds: {', '.join(builtin_names())}; or give a YAML path)"
             )
-        try:
-            text = path.read_text()
-        except OSError as exc:
-            raise WorldError(f"cannot read world file {spec}: {exc.strerror}") from exc
-        except UnicodeDecodeError:
-            raise WorldError(f"{spec}: not a text file (give the map's YAML, not its image)") from None
+        text = read_text(path, what="world file", error=WorldError)
         origin = str(path)
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}" if mark is not None else ""
-        raise WorldError(f"{origin}: malformed YAML{where}") from exc
+    data = parse_yaml(text, origin=origin, error=WorldError)
     # imported here: occupancy builds on this module's World and parse_world
     from lfdfuse.world import occupancy
 
