@@ -99,7 +99,10 @@ def test_demo_check_says_when_learning_failed() -> None:
     [
         ("walls: [[[0, 0], [10, 0], [10, 5], [0, 5], [0, 0]]]\nstart: [20, 20, 0]\n", "outside the map"),
         ("walls: [[[0, 0], [10, 0], [10, 5], [0, 5], [0, 0]]]\nstart: [0, 2, 0]\n", "wall"),
-        ("walls: [[[0, 0], [1000000, 0], [1000000, 5], [0, 5], [0, 0]]]\nstart: [1, 2, 0]\n", "at most 500 m"),
+        (
+            "walls: [[[0, 0], [1000000, 0], [1000000, 5], [0, 5], [0, 0]]]\nstart: [1, 2, 0]\n",
+            "at most 500 m",
+        ),
         ("walls: [[[0, 0], [10, 0]]]\nstart: [1, 2, 0]\nroof: tin\n", "unknown key 'roof'"),
         ("walls: [[[0, x], [10, 0]]]\nstart: [1, 2, 0]\n", "walls[0][0][1] must be a finite number"),
     ],
