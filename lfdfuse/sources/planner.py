@@ -1,8 +1,9 @@
 """A grid planner over the free space, inflated by the robot radius.
 
 Cells of ``resolution_m`` whose centre is farther than the robot radius (plus a small margin)
-from every segment, and 4-connected to the start, are free. Cost-to-go fields are computed with
-Dijkstra over the 8-connected grid (scikit-image's ``MCP_Geometric``): a step costs its length
+from every segment are passable; those 4-connected to the world's start are free (goals where
+the robot does not fit snap to them), and a robot started in another region tours that one.
+Cost-to-go fields are computed with Dijkstra over the 8-connected grid (scikit-image's ``MCP_Geometric``): a step costs its length
 times the mean of its two cells' clearance penalties, which keeps paths in the middle of
 corridors. Teachers follow the field downhill.
 
@@ -86,15 +87,16 @@ class Planner:
             ny=self.ny,
             exact_m=max(params.comfort_m, passable_m),
         )
-        passable = self.clearance > passable_m
-        # free space = the passable cells 4-connected to the start pose
+        #: cells the robot fits in, and their 4-connected regions (labels from 1; 0 = blocked)
+        self.passable = self.clearance > passable_m
+        self.regions, _ = ndimage.label(self.passable)
+        # free space = the passable cells 4-connected to the world's start pose
         start = self.cell(world.start[0], world.start[1])
-        if not passable[start]:
-            start = self.nearest_free(passable, *start)
-        labels, _ = ndimage.label(passable)
-        self.free = labels == labels[start]
+        if not self.passable[start]:
+            start = self.nearest_free(self.passable, *start)
+        self.free = self.regions == self.regions[start]
         self.step_cost = 1.0 + params.penalty * np.maximum(0.0, 1.0 - self.clearance / params.comfort_m)
-        self._mcp = MCP_Geometric(np.where(self.free, self.step_cost, np.inf), fully_connected=True)
+        self._mcp = MCP_Geometric(np.where(self.passable, self.step_cost, np.inf), fully_connected=True)
         self._fields: dict[tuple[int, int], np.ndarray] = {}
 
     def cell(self, x: float, y: float) -> tuple[int, int]:
@@ -115,19 +117,25 @@ class Planner:
         return int(idx[k, 0]), int(idx[k, 1])
 
     def field(self, x: float, y: float) -> np.ndarray:
-        """Cost-to-go ``(nx, ny)`` to the free cell nearest ``(x, y)``; inf where unreachable.
+        """Cost-to-go ``(nx, ny)`` to ``(x, y)``; inf where unreachable.
 
-        A step between neighbouring free cells costs its length (in cells) times the mean of
+        The goal is the cell of ``(x, y)`` when the robot fits there (in any region: a robot
+        started elsewhere tours its own region), else the nearest free cell. A step between
+        neighbouring cells of the goal's region costs its length (in cells) times the mean of
         their step costs. Fields are cached per goal cell.
         """
         goal = self.cell(x, y)
-        if not self.free[goal]:
+        if not self.passable[goal]:
             goal = self.nearest_free(self.free, *goal)
+        return self._field_to(goal)
+
+    def _field_to(self, goal: tuple[int, int]) -> np.ndarray:
         cached = self._fields.get(goal)
         if cached is not None:
             return cached
         dist, _ = self._mcp.find_costs([goal])
-        dist = np.where(self.free, dist, np.inf)
+        # diagonal steps may touch another region corner to corner: keep to the goal's
+        dist = np.where(self.regions == self.regions[goal], dist, np.inf)
         dist.setflags(write=False)
         if len(self._fields) >= max(1, min(_FIELDS_KEPT, _FIELD_CELLS_KEPT // dist.size)):
             self._fields.pop(next(iter(self._fields)))
@@ -154,8 +162,14 @@ class Planner:
         return self.centre(i, j)
 
     def farthest(self, x: float, y: float) -> tuple[float, float]:
-        """The free cell with the largest cost-to-go from ``(x, y)`` (for touring)."""
-        fld = self.field(x, y)
+        """The cell with the largest cost-to-go from ``(x, y)`` in its region (for touring).
+
+        From a point where the robot does not fit, the nearest cell where it does.
+        """
+        here = self.cell(x, y)
+        if not self.passable[here]:
+            here = self.nearest_free(self.passable, *here)
+        fld = self._field_to(here)
         masked = np.where(np.isfinite(fld), fld, -1.0)
         i, j = np.unravel_index(int(np.argmax(masked)), masked.shape)
         return self.centre(int(i), int(j))

@@ -42,16 +42,18 @@ def nearest_wall(seg: np.ndarray, gx: np.ndarray, gy: np.ndarray) -> np.ndarray:
 
 
 def brute_field(p: Planner, goal: tuple[int, int]) -> np.ndarray:
-    """Cost-to-go over 8-connected free cells: a step costs its length × the mean step cost."""
+    """Cost-to-go over the 8-connected cells of the goal's region: a step costs its length × the
+    mean step cost."""
+    region = p.regions == p.regions[goal]
     idx = -np.ones((p.nx, p.ny), dtype=np.int64)
-    cells = np.argwhere(p.free)
-    idx[p.free] = np.arange(len(cells))
+    cells = np.argwhere(region)
+    idx[region] = np.arange(len(cells))
     rows, cols, w = [], [], []
     for di, dj in ((1, 0), (0, 1), (1, 1), (1, -1)):
         a = cells + (di, dj)
         ok = (a[:, 0] >= 0) & (a[:, 0] < p.nx) & (a[:, 1] >= 0) & (a[:, 1] < p.ny)
         src, dst = cells[ok], a[ok]
-        ok2 = p.free[dst[:, 0], dst[:, 1]]
+        ok2 = region[dst[:, 0], dst[:, 1]]
         src, dst = src[ok2], dst[ok2]
         cost = (
             math.hypot(di, dj) * 0.5 * (p.step_cost[src[:, 0], src[:, 1]] + p.step_cost[dst[:, 0], dst[:, 1]])
@@ -63,7 +65,7 @@ def brute_field(p: Planner, goal: tuple[int, int]) -> np.ndarray:
     graph = coo_matrix((v, (r, c)), shape=(len(cells), len(cells))).tocsr()
     d = dijkstra(graph, directed=False, indices=int(idx[goal]))
     out = np.full((p.nx, p.ny), np.inf)
-    out[p.free] = d
+    out[region] = d
     return out
 
 
@@ -107,6 +109,26 @@ def test_builtin_worlds_match_brute_force(name: str) -> None:
     check_planner(load_world(name), np.random.default_rng(0), 3)
 
 
+def test_a_robot_in_another_region_tours_its_own() -> None:
+    world = load_world("building")
+    p = Planner(world, robot_radius_m=RADIUS)
+    others = [r for r in range(1, int(p.regions.max()) + 1) if not p.free[p.regions == r].any()]
+    assert others  # the building has passable pockets apart from the start's region
+    rng = np.random.default_rng(2)
+    for r in others:
+        cells = np.argwhere(p.regions == r)
+        x, y = p.centre(*cells[rng.integers(len(cells))])
+        far = p.farthest(x, y)
+        assert p.regions[p.cell(*far)] == r
+        fld = p.field(*far)
+        assert np.isfinite(fld[p.cell(x, y)]) and not np.isfinite(fld[p.free]).any()
+        want = brute_field(p, p.cell(*far))
+        fin = np.isfinite(want)
+        assert np.array_equal(np.isfinite(fld), fin) and np.allclose(
+            fld[fin], want[fin], rtol=1e-9, atol=1e-9
+        )
+
+
 def test_farthest_is_the_most_expensive_reachable_cell() -> None:
     p = Planner(load_world("building"), robot_radius_m=RADIUS)
     x, y = 2.0, 2.0
@@ -116,10 +138,14 @@ def test_farthest_is_the_most_expensive_reachable_cell() -> None:
 
 
 def test_goal_in_a_wall_snaps_to_free_space() -> None:
-    p = Planner(load_world("corridor"), robot_radius_m=RADIUS)
-    fld = p.field(-50.0, -50.0)  # far outside: the nearest free cell becomes the goal
-    assert np.isfinite(fld).sum() == p.free.sum()
-    assert np.min(fld) == 0.0
+    world = load_world("corridor")
+    p = Planner(world, robot_radius_m=RADIUS)
+    ax, ay, bx, by = world.segments[0]
+    x, y = (ax + bx) / 2, (ay + by) / 2  # on a wall: the nearest free cell becomes the goal
+    fld = p.field(x, y)
+    assert np.array_equal(np.isfinite(fld), p.free)
+    goal = np.unravel_index(int(np.argmin(fld)), fld.shape)
+    assert fld[goal] == 0.0 and math.dist(p.centre(int(goal[0]), int(goal[1])), (x, y)) < 1.0
 
 
 def test_clearance_grid_is_exact_within_reach() -> None:
