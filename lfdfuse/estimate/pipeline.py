@@ -24,7 +24,7 @@ import numpy as np
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.baselines import angle_errors, arbitration_weights, nnls_weights
 from lfdfuse.estimate.identifiability import identifiable
-from lfdfuse.estimate.model import FusionModel, row_data
+from lfdfuse.estimate.model import FusionModel, row_data, sum_cos
 from lfdfuse.estimate.paper import PFParams, normalise, run_filter
 from lfdfuse.estimate.smc import SMCParams, TemperedSMC
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step, default_weights_for, write_table
@@ -101,16 +101,26 @@ def _pf_rows(
             [row_data(*problems[i]) for i in todo], trials=k, model=opts.model, params=opts.smc, rng=rng
         )
         res = smc.run()
-        means, covs = res.mean(), res.cov()
+        means, covs, particles = res.mean(), res.cov(), res.weights
         for j, i in enumerate(todo):
             n = problems[i][0].shape[1]
-            m = means[j * k : (j + 1) * k, :n]  # (K, n)
             cov = covs[j * k : (j + 1) * k, :n, :n].mean(axis=0)
+            pinned = identifiable(cov, opts.model)
+            if pinned:
+                # the data pins the row: report the posterior mode (the most likely posterior
+                # particle), which lands as close to the truth as a heading fit; a posterior mean
+                # is pulled off the simplex's edges, where sparse rows live, by the posterior's width
+                data = row_data(*problems[i])
+                w = particles[j * k : (j + 1) * k, :, :n]  # (K, M, n)
+                best = np.array([trial[int(np.argmax(sum_cos(data, trial)))] for trial in w])  # (K, n)
+            else:
+                # the data leaves a direction open: the posterior mean, where the prior decides it
+                best = means[j * k : (j + 1) * k, :n]
             out[i] = RowEstimate(
-                normalise(m.mean(axis=0)),
+                normalise(best.mean(axis=0)),
                 np.sqrt(np.maximum(np.diag(cov), 0.0)),
-                m.std(axis=0) if k > 1 else None,
-                identifiable(cov, opts.model),
+                best.std(axis=0) if k > 1 else None,
+                pinned,
             )
     return [r for r in out if r is not None]
 

@@ -217,7 +217,7 @@ def bench_segment(rows: list[Row], folder: Path) -> None:
 
 
 def bench_pf(rows: list[Row], folder: Path) -> None:
-    from lfdfuse.estimate.pf import PFParams, reference_step, step
+    from lfdfuse.estimate.paper import PFParams, reference_step, step
 
     k, m, n = 30, 1000, 6
     p = PFParams(particles=m)
@@ -327,92 +327,6 @@ def bench_demo(rows: list[Row], folder: Path) -> None:
     rows.append(Row("make demo pipeline, environment ready (s)", time.perf_counter() - t0, "s", "-", 0.0))
 
 
-def bench_quality(rows: list[Row], folder: Path) -> None:
-    """Estimation quality (not speed): synthetic recovery and the round trip, per method."""
-    from lfdfuse.estimate.baselines import angle_errors, nnls_weights
-    from lfdfuse.estimate.pf import PFParams, run_filter
-
-    for t in (100, 600, 2400):
-        res: dict[str, list[tuple[float, float]]] = {"vonmises": [], "paper": [], "nnls": []}
-        for seed in range(5):
-            rng = np.random.default_rng(seed)
-            n = 5
-            w = rng.dirichlet(np.ones(n))
-            ang = rng.uniform(-np.pi, np.pi, (t + 300, n))
-            mag = rng.uniform(0.2, 1.0, (t + 300, n))
-            v = np.stack([mag * np.cos(ang), mag * np.sin(ang)], axis=-1)
-            f = np.einsum("tnd,n->td", v, w)
-            th = np.arctan2(f[:, 1], f[:, 0]) + rng.normal(0.0, math.radians(5.0), t + 300)
-            vr = np.stack([np.cos(th), np.sin(th)], axis=-1)
-            tr, te = slice(0, t), slice(t, t + 300)
-            floor = angle_errors(v[te], vr[te], w).mean()
-            for name in res:
-                if name == "nnls":
-                    est = nnls_weights(v[tr], vr[tr])
-                    est = est / est.sum()
-                else:
-                    p = PFParams(likelihood=name)  # type: ignore[arg-type]
-                    est = run_filter(
-                        v[tr], vr[tr], trials=1, rng=np.random.default_rng(100 + seed), params=p
-                    ).weights[0]
-                res[name].append(
-                    (float(np.abs(est - w).sum()), float(angle_errors(v[te], vr[te], est).mean() / floor))
-                )
-        for name, vals in res.items():
-            a = np.array(vals)
-            rows.append(Row(f"synthetic {t} steps, {name}: L1", float(a[:, 0].mean()), "L1", "-", 0.0))
-            rows.append(
-                Row(
-                    f"synthetic {t} steps, {name}: held-out err/floor",
-                    float(a[:, 1].mean()),
-                    "ratio",
-                    "-",
-                    0.0,
-                )
-            )
-    _round_trip(rows, folder)
-
-
-def _round_trip(rows: list[Row], folder: Path) -> None:
-    from lfdfuse.estimate.pf import PFParams
-    from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
-    from lfdfuse.evaluate.roundtrip import heading_errors, weight_errors
-    from lfdfuse.execute.run import ExecuteOptions, drive_table
-    from lfdfuse.segment.pipeline import segment_file
-    from lfdfuse.segment.read import read_segmented
-    from lfdfuse.tools.samples import THREE_GOALS
-
-    world = load_world("building")
-    simulate(
-        SimulateOptions(world=world, legs=THREE_GOALS, teacher_name="task", duration_s=400.0, seed=1),
-        out=folder / "rt.mcap",
-    )
-    segment_file(folder / "rt.mcap", out=folder / "rt.seg.mcap")
-    truth, _, _ = estimate_run(read_segmented(folder / "rt.seg.mcap"), opts=EstimateOptions())
-    runs = []
-    for seed in (11, 12):
-        opts = ExecuteOptions(
-            world=world, table=truth, max_time_s=300.0, seed=seed, heading_noise_rad=math.radians(5.0)
-        )
-        drive_table(opts, out=folder / f"rt{seed}.mcap", command="simulate", teacher=True)
-        segment_file(
-            folder / f"rt{seed}.mcap", out=folder / f"rt{seed}.seg.mcap", behaviors=",".join(truth.behaviors)
-        )
-        runs.append(read_segmented(folder / f"rt{seed}.seg.mcap"))
-    for label, eo in (
-        ("vonmises", EstimateOptions()),
-        ("paper", EstimateOptions(pf=PFParams(likelihood="paper"))),
-        ("nnls", EstimateOptions(method="nnls")),
-    ):
-        learned, _, _ = estimate_run(runs[0], opts=eo)
-        errs = weight_errors(truth, learned)
-        rows.append(
-            Row(f"round trip {label}: max row L1 (>= 50 samples)", max(e.l1 for e in errs), "L1", "-", 0.0)
-        )
-        ratio = heading_errors(learned, runs[1]).mean() / heading_errors(truth, runs[1]).mean()
-        rows.append(Row(f"round trip {label}: held-out err / true table's", float(ratio), "ratio", "-", 0.0))
-
-
 BENCHES: dict[str, Callable[[list[Row], Path], None]] = {
     "raycast": lambda rows, _f: bench_raycast(rows),
     "simulate": lambda rows, _f: bench_simulate(rows),
@@ -423,7 +337,6 @@ BENCHES: dict[str, Callable[[list[Row], Path], None]] = {
     "estimate": bench_estimate,
     "execute": bench_execute,
     "demo": bench_demo,
-    "quality": bench_quality,
 }
 
 

