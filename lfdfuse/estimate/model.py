@@ -90,9 +90,21 @@ def cos_errors(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.where(r > 1e-12, a / np.maximum(r, 1e-12), 0.0)
 
 
+#: steps per block when summing over a row: bounds the (steps × particles) temporaries, so an
+#: hour-long demo costs the same memory as a minute-long one
+STEP_BLOCK = 2048
+
+
 def sum_cos(data: RowData, w: np.ndarray) -> np.ndarray:
     """The sufficient statistic ``S = Σₜ cos Δₜ`` for weight vectors ``w (P, n)`` → ``(P,)``."""
-    return cos_errors(data.along @ w.T, data.across @ w.T).sum(axis=0)
+    wt = np.ascontiguousarray(w.T)
+    s = np.zeros(w.shape[0])
+    for c in range(0, data.steps, STEP_BLOCK):
+        a = data.along[c : c + STEP_BLOCK] @ wt
+        b = data.across[c : c + STEP_BLOCK] @ wt
+        r = np.sqrt(a * a + b * b)
+        s += (a / np.maximum(r, 1e-12)).sum(axis=0)
+    return s
 
 
 def log_marginal(s: np.ndarray, steps: np.ndarray | int, model: FusionModel) -> np.ndarray:

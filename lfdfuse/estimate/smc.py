@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import logsumexp
 
-from lfdfuse.estimate.model import FusionModel, RowData, log_marginal, log_prior_alr, sample_prior
+from lfdfuse.estimate.model import FusionModel, RowData, log_marginal, log_prior_alr, sample_prior, sum_cos
 from lfdfuse.estimate.resampling import ess, gather, resample
 
 
@@ -70,11 +70,10 @@ class SMCResult:
 
 
 class _Rows:
-    """The rows' steps as ``[along; across] (2T, n)`` blocks: one BLAS product per row."""
+    """The rows' steps; ``S`` per row in blocks of steps (one BLAS product per block)."""
 
     def __init__(self, rows: Sequence[RowData]) -> None:
-        self.blocks = [np.ascontiguousarray(np.concatenate([r.along, r.across], axis=0)) for r in rows]
-        self.steps = [r.steps for r in rows]
+        self.rows = list(rows)
         self.sizes = [r.size for r in rows]
 
     def sum_cos(self, w: np.ndarray, active: np.ndarray) -> np.ndarray:
@@ -84,11 +83,7 @@ class _Rows:
         """
         out = np.zeros(w.shape[:2])
         for i in np.nonzero(active)[0]:
-            t, n = self.steps[i], self.sizes[i]
-            x = self.blocks[i] @ w[i, :, :n].T  # (2T, P)
-            a, b = x[:t], x[t:]
-            r = np.sqrt(a * a + b * b)
-            out[i] = (a / np.maximum(r, 1e-12)).sum(axis=0)
+            out[i] = sum_cos(self.rows[i], w[i, :, : self.sizes[i]])
         return out
 
 

@@ -14,12 +14,14 @@ from typing import Any
 
 import numpy as np
 
-from lfdfuse.behaviors.primitives import BehaviorParams, Observations, compute
+from lfdfuse.behaviors.landmarks import OpeningTracker, side_openings
+from lfdfuse.behaviors.primitives import ATTRACT, BehaviorParams, Observations, compute
 from lfdfuse.control.drive import heading_to_command
 from lfdfuse.control.safety import SafetyParams, free_heading
 from lfdfuse.errors import ConfigError
+from lfdfuse.network.landmarks import Cues
 from lfdfuse.network.runtime import Decision, NetworkRuntime, step_name_of
-from lfdfuse.network.table import FusionTable
+from lfdfuse.network.table import FusionTable, Network
 from lfdfuse.sim.loop import side_beam_index
 from lfdfuse.sim.robot import RobotParams
 from lfdfuse.sim.sensors import SensorParams, target_reached
@@ -27,8 +29,30 @@ from lfdfuse.sim.simulator import Observation
 from lfdfuse.world.model import World
 
 
+def weighted_targets(table: FusionTable) -> list[str]:
+    """Targets the table cannot run without: its goals, and attract behaviours that carry weight.
+
+    An ``attract_<t>`` with zero weight everywhere never moves the robot; without its target it is
+    simply never applicable (DESIGN §8: only behaviours that carry weight need their targets).
+    """
+    weights: list[dict[str, float]] = [table.default_weights]
+
+    def walk(net: Network) -> None:
+        for step in net.steps:
+            if step.network is not None:
+                walk(step.network)
+            if step.default_weights:
+                weights.append(step.default_weights)
+            weights.extend(row.weights for row in step.fusion)
+
+    walk(table.network)
+    carried = {b for w in weights for b, v in w.items() if v > 0}
+    need = [b[len(ATTRACT) :] for b in table.behaviors if b.startswith(ATTRACT) and b in carried]
+    return need + [g for g in table.goals() if g not in need]
+
+
 def check_table_world(table: FusionTable, world: World) -> None:
-    missing = [t for t in table.targets() if t not in world.target_names]
+    missing = [t for t in weighted_targets(table) if t not in world.target_names]
     if missing:
         raise ConfigError(
             f"the table needs target{'s' if len(missing) > 1 else ''} {', '.join(missing)} that world {world.name!r} lacks"
@@ -72,10 +96,28 @@ class NetworkDriver:
         self.side: dict[str, list[tuple[float, float]]] = defaultdict(list)
         self._il = side_beam_index(self.geometry.angles, math.pi / 2)
         self._ir = side_beam_index(self.geometry.angles, -math.pi / 2)
+        self.openings = OpeningTracker()  # landmark cues for sub-goal steps (issue 15)
+        self._odom: tuple[float, float, float] | None = None
 
     @property
     def done(self) -> bool:
         return self.runtime.complete
+
+    def _cues(self, observation: Observation) -> Cues:
+        """Opening onsets from this scan, and the odometry increment since the last tick.
+
+        Only relative motion is used (what wheel odometry gives), never the map position.
+        """
+        p = observation.pose
+        step_m = turn = 0.0
+        if self._odom is not None:
+            x, y, th = self._odom
+            step_m = math.hypot(p.x - x, p.y - y)
+            turn = math.atan2(math.sin(p.theta - th), math.cos(p.theta - th))
+        self._odom = (p.x, p.y, p.theta)
+        flags = side_openings(observation.reading.ranges_m[None, :], self.geometry, self.openings.params)[0]
+        left, right = self.openings.update(flags, turn)
+        return Cues(left, right, step_m, turn)
 
     def command(self, observation: Observation) -> tuple[float, float]:
         reading = observation.reading
@@ -90,7 +132,7 @@ class NetworkDriver:
         )
         outputs = compute(obs, self.table.behaviors, self.params)
         reached = {d.name for d in reading.detections if target_reached(d.range_m, self.sensors.camera)}
-        dec = self.runtime.decide(outputs, reached)
+        dec = self.runtime.decide(outputs, reached, self._cues(observation))
         for goal in dec.achieved_now:
             self.reached.append((goal, self.ticks))
         self.last, self.last_outputs = dec, outputs
