@@ -30,10 +30,13 @@ from lfdfuse.world.model import World
 
 
 def weighted_targets(table: FusionTable) -> list[str]:
-    """Targets the table cannot run without: its goals, and attract behaviours that carry weight.
+    """Targets the table cannot run without: those of attract behaviours that carry weight.
 
     An ``attract_<t>`` with zero weight everywhere never moves the robot; without its target it is
-    simply never applicable (DESIGN §8: only behaviours that carry weight need their targets).
+    simply never applicable (DESIGN §8: only behaviours that carry weight need their targets). A
+    goal whose target the world lacks is never achieved: its step drives on with its weights (a
+    tour learned past targets still keeps its style in a building without them), and the report
+    lists the goal as not reached.
     """
     weights: list[dict[str, float]] = [table.default_weights]
 
@@ -47,8 +50,7 @@ def weighted_targets(table: FusionTable) -> list[str]:
 
     walk(table.network)
     carried = {b for w in weights for b, v in w.items() if v > 0}
-    need = [b[len(ATTRACT) :] for b in table.behaviors if b.startswith(ATTRACT) and b in carried]
-    return need + [g for g in table.goals() if g not in need]
+    return [b[len(ATTRACT) :] for b in table.behaviors if b.startswith(ATTRACT) and b in carried]
 
 
 def check_table_world(table: FusionTable, world: World) -> None:

@@ -112,7 +112,7 @@ def run_starts(
     for k, start in enumerate(starts):
         res = drive_table(
             ExecuteOptions(world=w, table=table, start=Pose(*start), max_time_s=case.max_time_s, seed=k),
-            out=folder / f"{label}-{k}.mcap",
+            out=folder / f"{label.replace('/', '-')}-{k}.mcap",
             command="bench",
         )
         rep = res.report

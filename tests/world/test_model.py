@@ -66,5 +66,7 @@ def test_bad_world_files_name_the_problem(tmp_path: Path, text: str, message: st
 
 
 def test_unknown_world_lists_valid_names() -> None:
-    with pytest.raises(WorldError, match="building, corridor, obstacles, office-room, ring-spur, ring-spur-large, tee"):
+    with pytest.raises(
+        WorldError, match="building, corridor, obstacles, office-room, ring-spur, ring-spur-large, tee"
+    ):
         load_world("nowhere")
