@@ -33,6 +33,8 @@ app = typer.Typer(add_completion=False, pretty_exceptions_enable=False)
 
 
 def _cell(value: Any) -> str:
+    if isinstance(value, (list, tuple)):
+        return " ".join(_cell(v) for v in value)
     if isinstance(value, float):
         if math.isinf(value) or math.isnan(value):
             return "-"
@@ -60,7 +62,7 @@ def main(
     quick: bool = typer.Option(False, "--quick", help="Shorter runs (a smoke test of the benchmarks)."),
 ) -> None:
     """Run the benchmarks, print a table per suite and write JSON."""
-    console = Console(highlight=False)
+    console = Console(highlight=False, width=200)  # wide tables; piped to a file they stay whole
     results: dict[str, list[dict[str, Any]]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         for name in suite:
