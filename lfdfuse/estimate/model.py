@@ -90,18 +90,20 @@ def cos_errors(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.where(r > 1e-12, a / np.maximum(r, 1e-12), 0.0)
 
 
-#: steps per block when summing over a row: bounds the (steps × particles) temporaries, so an
-#: hour-long demo costs the same memory as a minute-long one
-STEP_BLOCK = 2048
+#: elements of a (steps × particles) temporary when summing over a row: steps are taken in blocks
+#: of this size over the particle count, so an hour-long demo or 30 trials cost the same memory
+#: as a minute-long one
+BLOCK_ELEMENTS = 1 << 21
 
 
 def sum_cos(data: RowData, w: np.ndarray) -> np.ndarray:
     """The sufficient statistic ``S = Σₜ cos Δₜ`` for weight vectors ``w (P, n)`` → ``(P,)``."""
     wt = np.ascontiguousarray(w.T)
     s = np.zeros(w.shape[0])
-    for c in range(0, data.steps, STEP_BLOCK):
-        a = data.along[c : c + STEP_BLOCK] @ wt
-        b = data.across[c : c + STEP_BLOCK] @ wt
+    block = max(16, BLOCK_ELEMENTS // max(1, w.shape[0]))
+    for c in range(0, data.steps, block):
+        a = data.along[c : c + block] @ wt
+        b = data.across[c : c + block] @ wt
         r = np.sqrt(a * a + b * b)
         s += (a / np.maximum(r, 1e-12)).sum(axis=0)
     return s
@@ -115,7 +117,11 @@ def log_marginal(s: np.ndarray, steps: np.ndarray | int, model: FusionModel) -> 
     t = np.asarray(steps, dtype=np.float64)[..., None]
     k = model.kappas
     terms = k * (s[..., None] - t) - t * model._log_norm
-    return np.asarray(logsumexp(terms, axis=-1) - math.log(len(k)))
+    # a log-sum-exp over the κ nodes in place (scipy's makes several copies of the (…, J) array)
+    top = terms.max(axis=-1)
+    terms -= top[..., None]
+    np.exp(terms, out=terms)
+    return np.asarray(top + np.log(terms.sum(axis=-1)) - math.log(len(k)))
 
 
 def kappa_posterior(s: float, steps: int, model: FusionModel) -> np.ndarray:

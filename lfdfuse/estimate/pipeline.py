@@ -80,6 +80,10 @@ def groups_of(run: SegmentedRun) -> list[Group]:
     return out
 
 
+#: chains (rows × trials) per sampler pass: bounds the sampler's memory (chains × particles × κ nodes)
+CHAIN_BATCH = 128
+
+
 def _pf_rows(
     problems: Sequence[tuple[np.ndarray, np.ndarray]], *, opts: EstimateOptions, rng: np.random.Generator
 ) -> list[RowEstimate]:
@@ -95,14 +99,18 @@ def _pf_rows(
             out[i] = RowEstimate(np.full(n, 1.0 / n), np.full(n, prior_sd), None, False)
         else:
             todo.append(i)
-    if todo:
-        k = opts.trials
+    k = opts.trials
+    # rows are sampled in batches: the sampler's arrays grow with the rows it holds, and an
+    # hour-long demo has hundreds of rows (a batch is one pass for any ordinary demo)
+    per_pass = max(1, CHAIN_BATCH // k)
+    for b in range(0, len(todo), per_pass):
+        batch = todo[b : b + per_pass]
         smc = TemperedSMC(
-            [row_data(*problems[i]) for i in todo], trials=k, model=opts.model, params=opts.smc, rng=rng
+            [row_data(*problems[i]) for i in batch], trials=k, model=opts.model, params=opts.smc, rng=rng
         )
         res = smc.run()
         means, covs, particles = res.mean(), res.cov(), res.weights
-        for j, i in enumerate(todo):
+        for j, i in enumerate(batch):
             n = problems[i][0].shape[1]
             cov = covs[j * k : (j + 1) * k, :n, :n].mean(axis=0)
             pinned = identifiable(cov, opts.model)

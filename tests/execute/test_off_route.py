@@ -144,11 +144,6 @@ def office(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, object]:
     return tmp, demonstrate(CASES["office-room"], folder=tmp)
 
 
-@pytest.mark.xfail(
-    reason="issue 15 is open: at run time the robot counts a corner as an opening the teacher, "
-    "turning early, did not (the n-th opening is met too soon); see the bench `offroute`",
-    strict=False,
-)
 def test_a_turn_into_an_office_off_the_route_is_reproduced(office: tuple[Path, Path]) -> None:
     tmp, seg = office
     case = CASES["office-room"]
