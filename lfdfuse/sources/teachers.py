@@ -56,6 +56,13 @@ def side_range(
     return float(ranges[sel].min())
 
 
+#: a wall-follower that travelled less than STUCK_M in STUCK_TICKS ticks tours by the planner
+#: for ESCAPE_TICKS ticks
+STUCK_TICKS = 60
+STUCK_M = 0.3
+ESCAPE_TICKS = 150
+
+
 class StyleTeacher:
     """Drives a chain of legs; a leg without target tours the map holding its style."""
 
@@ -87,6 +94,9 @@ class StyleTeacher:
         self._last: Pose | None = None
         self._tour: list[tuple[float, float]] = []
         self._steps = 0
+        # distance travelled at each of the last ticks, to notice a wall-follower that is stuck
+        self._progress: deque[float] = deque(maxlen=STUCK_TICKS)
+        self._escape_until = 0
         self._obstacles = [self._obstacle_disc(i) for i in range(len(world.obstacles))]
 
     @property
@@ -121,6 +131,7 @@ class StyleTeacher:
         if self._last is not None:
             self._travelled += math.hypot(pose.x - self._last.x, pose.y - self._last.y)
         self._last = pose
+        self._progress.append(self._travelled)
         seen = {d.name: d for d in reading.detections}
         if not self.done:
             goal = self.legs[self.leg_index].target
@@ -154,7 +165,7 @@ class StyleTeacher:
                 return self._safe(float(det.bearing_rad), reading)
             t = self.world.target(leg.target)
             gx, gy = t.x, t.y
-        elif leg.style in ("keep-left", "keep-right"):
+        elif leg.style in ("keep-left", "keep-right") and not self._escaping():
             # touring while keeping to one side: follow that wall, into every opening on it,
             # as a person told "keep left" would (a planner's route would also turn the other way)
             return self._safe(self._wall_follow(reading, 1.0 if leg.style == "keep-left" else -1.0), reading)
@@ -172,6 +183,22 @@ class StyleTeacher:
         if aim is not None:
             return self._safe(wrap_angle(math.atan2(aim[1] - pose.y, aim[0] - pose.x) - pose.theta), reading)
         return self._safe(rel_path + self._lateral(reading, leg.style), reading)
+
+    def _escaping(self) -> bool:
+        """Whether a stuck wall-follower tours by the planner for a while instead.
+
+        On real maps a side opening can be a gap narrower than the robot: the wall-follower turns
+        into it and the reflex holds it there. A person would give up and drive on; so does the
+        teacher, when it has moved less than ``STUCK_M`` in ``STUCK_TICKS`` ticks.
+        """
+        if self._steps < self._escape_until:
+            return True
+        full = len(self._progress) == STUCK_TICKS
+        if full and self._progress[-1] - self._progress[0] < STUCK_M:
+            self._escape_until = self._steps + ESCAPE_TICKS
+            self._progress.clear()
+            return True
+        return False
 
     def _safe(self, rel: float, reading: Reading) -> float:
         """The free direction nearest ``rel``: a person does not drive into a wall."""
