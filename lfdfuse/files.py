@@ -25,6 +25,11 @@ def umask() -> int:
 
 def write_text_atomic(path: str | Path, text: str) -> None:
     """Write ``text`` to ``path`` atomically, with the usual permissions; errors as :class:`LfdError`."""
+    write_bytes_atomic(path, text.encode())
+
+
+def write_bytes_atomic(path: str | Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` atomically (temp file in the folder, fsync, rename)."""
     p = Path(path)
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
@@ -34,8 +39,8 @@ def write_text_atomic(path: str | Path, text: str) -> None:
     except OSError as exc:
         raise LfdError(f"cannot write {p}: {exc.strerror}") from exc
     try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
             f.flush()
             os.fsync(f.fileno())
         os.chmod(tmp, 0o666 & ~umask())

@@ -86,7 +86,7 @@ def row_data(vectors: np.ndarray, demo: np.ndarray) -> RowData:
 
 def cos_errors(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``cos Δ`` from the fused vector's components along / across the demo (0 where it is 0)."""
-    r = np.sqrt(a * a + b * b)
+    r = np.hypot(a, b)
     return np.where(r > 1e-12, a / np.maximum(r, 1e-12), 0.0)
 
 
@@ -104,7 +104,7 @@ def sum_cos(data: RowData, w: np.ndarray) -> np.ndarray:
     for c in range(0, data.steps, block):
         a = data.along[c : c + block] @ wt
         b = data.across[c : c + block] @ wt
-        r = np.sqrt(a * a + b * b)
+        r = np.hypot(a, b)
         s += (a / np.maximum(r, 1e-12)).sum(axis=0)
     return s
 

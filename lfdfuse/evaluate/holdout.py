@@ -27,7 +27,8 @@ import numpy as np
 
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
-from lfdfuse.network.table import FusionTable, Step
+from lfdfuse.evaluate.replay import fused_vectors
+from lfdfuse.network.table import FusionTable
 from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.segment.read import SegmentedRun
 
@@ -101,47 +102,11 @@ def slice_run(run: SegmentedRun, start: int, stop: int) -> SegmentedRun:
     )
 
 
-def _leaf_steps(table: FusionTable) -> list[Step]:
-    out: list[Step] = []
-
-    def walk(steps: tuple[Step, ...]) -> None:
-        for s in steps:
-            if s.network is not None:
-                walk(s.network.steps)
-            else:
-                out.append(s)
-
-    walk(table.network.steps)
-    return out
-
-
 def predict(table: FusionTable, run: SegmentedRun, steps: np.ndarray, segment_offset: int = 0) -> np.ndarray:
-    """Predicted headings (rad) of ``steps`` of ``run`` by ``table``, fused as the runtime fuses.
-
-    The table's network step ``i`` serves the run's goal segment ``i + segment_offset``.
-    """
-    leaf = _leaf_steps(table)
-    pos = [run.names.index(n) for n in table.behaviors]
-    out = np.zeros(len(steps))
-    for k, t in enumerate(steps.tolist()):
-        i = int(run.segment_of[t]) - segment_offset
-        step = leaf[i] if 0 <= i < len(leaf) else None
-        fallback = table.default_weights
-        weights: dict[str, float] = fallback
-        if step is not None:
-            if step.default_weights is not None:
-                fallback = step.default_weights
-            row = step.row(int(run.bac[t]))
-            weights = row.weights if row is not None else fallback
-        fused = np.zeros(2)
-        for name, w in weights.items():
-            fused += w * run.vectors[t, pos[table.behaviors.index(name)]]
-        if float(np.hypot(*fused)) <= 1e-9 and weights is not fallback:
-            fused = np.zeros(2)
-            for name, w in fallback.items():
-                fused += w * run.vectors[t, pos[table.behaviors.index(name)]]
-        out[k] = math.atan2(fused[1], fused[0]) if float(np.hypot(*fused)) > 1e-9 else 0.0
-    return out
+    """Predicted headings (rad) of ``steps`` of ``run`` by ``table``, fused as the runtime fuses."""
+    fused = fused_vectors(table, run, steps, segment_offset=segment_offset)
+    moving = np.hypot(fused[:, 0], fused[:, 1]) > 1e-9
+    return np.where(moving, np.arctan2(fused[:, 1], fused[:, 0]), 0.0)
 
 
 def _score(

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from lfdfuse.estimate.baselines import angle_errors, heading_fit_weights
+from lfdfuse.evaluate.replay import fused_vectors, leaf_steps, runtime_weights
 from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.network.table import FusionTable, Step, load_table
 from lfdfuse.segment.pipeline import segment_file
@@ -66,29 +67,6 @@ def demonstrate(
     elapsed = time.perf_counter() - t0
     segment_file(raw, out=seg, behaviors=",".join(truth.behaviors))
     return Demo(read_segmented(seg), elapsed)
-
-
-def leaf_steps(table: FusionTable) -> list[Step]:
-    """The fusion steps of a (nested) network, depth first: the order of the goal segments."""
-    out: list[Step] = []
-
-    def walk(steps: tuple[Step, ...]) -> None:
-        for s in steps:
-            if s.network is not None:
-                walk(s.network.steps)
-            else:
-                out.append(s)
-
-    walk(table.network.steps)
-    return out
-
-
-def runtime_weights(table: FusionTable, step: Step, bac: int) -> dict[str, float]:
-    """The weights execute uses in a BAC: the row's, else the step's default, else the table's."""
-    row = step.row(bac)
-    if row is not None:
-        return row.weights
-    return step.default_weights if step.default_weights is not None else table.default_weights
 
 
 def effective_weights(table: FusionTable, step: Step, bac: int) -> np.ndarray:
@@ -183,36 +161,14 @@ def weight_errors(truth: FusionTable, learned: FusionTable, *, min_samples: int 
 
 
 def heading_errors(table: FusionTable, run: SegmentedRun) -> np.ndarray:
-    """Per informative step of a segmented run: the table's fused heading error (rad).
-
-    Fused as the runtime fuses: every behaviour named by the weights in use, and the fallback
-    weights where a row's fused vector is zero.
-    """
-    steps = leaf_steps(table)
-    names = table.behaviors
-    pos = [run.names.index(n) for n in names]
-    errs = []
-    for seg in run.segments:
-        if seg.index >= len(steps):
-            break
-        step = steps[seg.index]
-        fallback = step.default_weights if step.default_weights is not None else table.default_weights
-        t = np.arange(seg.start, seg.stop)[run.informative[seg.start : seg.stop]]
-        if len(t) == 0:
-            continue
-        bacs = run.bac[t]
-        w = np.zeros((len(t), len(names)))
-        for bac in np.unique(bacs):
-            rw = runtime_weights(table, step, int(bac))
-            w[bacs == bac] = [rw.get(n, 0.0) for n in names]
-        vec = run.vectors[t][:, pos, :]
-        fused = np.einsum("tkd,tk->td", vec, w)
-        zero = np.hypot(fused[:, 0], fused[:, 1]) <= 1e-9
-        if zero.any():
-            fb = np.array([fallback.get(n, 0.0) for n in names])
-            fused[zero] = np.einsum("tkd,k->td", vec[zero], fb)
-        errs.append(angle_errors(fused[:, None, :], run.demo[t], np.ones(1)))
-    return np.concatenate(errs) if errs else np.zeros(0)
+    """Per informative step of the run's goal segments the table has steps for: the fused heading
+    error (rad), fused as the runtime fuses (:mod:`lfdfuse.evaluate.replay`)."""
+    n_steps = len(leaf_steps(table))
+    t = np.nonzero(run.informative & (run.segment_of < n_steps))[0]
+    if len(t) == 0:
+        return np.zeros(0)
+    fused = fused_vectors(table, run, t)
+    return angle_errors(fused[:, None, :], run.demo[t], np.ones(1))
 
 
 def crb_l1(vectors: np.ndarray, weights: np.ndarray, noise_rad: float) -> float:

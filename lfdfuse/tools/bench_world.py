@@ -23,13 +23,13 @@ import os
 import sys
 import tempfile
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from lfdfuse.sim.sensors import LaserParams
 from lfdfuse.sources.planner import Planner, PlannerParams
+from lfdfuse.tools.bench_pipeline import box_map, rate
 from lfdfuse.world.model import World, load_world
 from lfdfuse.world.raycast import RayCaster, _point_segment_distance, intersect
 
@@ -43,27 +43,6 @@ def shared_maps() -> Path:
     shared = os.environ.get("LFDFUSE_SHARED")
     root = Path(shared) if shared else Path(__file__).resolve().parents[2].parent / "shared"
     return root / "realdata" / "maps"
-
-
-def rate(fn: Callable[[], int], *, min_s: float) -> float:
-    """Items per second of ``fn`` (which returns how many items it did), over at least ``min_s``."""
-    done, t0 = 0, time.perf_counter()
-    while True:
-        done += fn()
-        el = time.perf_counter() - t0
-        if el >= min_s:
-            return done / el
-
-
-def box_map(n_segments: int, seed: int = 0) -> np.ndarray:
-    """A 40 × 30 m hall with axis-aligned boxes: ``n_segments`` segments, denser as it grows."""
-    rng = np.random.default_rng(seed)
-    segs: list[list[float]] = [[0, 0, 40, 0], [40, 0, 40, 30], [40, 30, 0, 30], [0, 30, 0, 0]]
-    while len(segs) < n_segments:
-        x, y = rng.uniform(1, 38), rng.uniform(1, 28)
-        w, h = rng.uniform(0.2, 1.5), rng.uniform(0.2, 1.5)
-        segs += [[x, y, x + w, y], [x + w, y, x + w, y + h], [x + w, y + h, x, y + h], [x, y + h, x, y]]
-    return np.asarray(segs[:n_segments], dtype=np.float64)
 
 
 class _PreviousCaster:

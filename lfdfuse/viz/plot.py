@@ -8,8 +8,6 @@ metadata so the same input gives the same bytes.
 from __future__ import annotations
 
 import io
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,6 +15,7 @@ import matplotlib
 from matplotlib.figure import Figure
 
 from lfdfuse.errors import ConfigError, LfdError
+from lfdfuse.files import write_bytes_atomic
 from lfdfuse.network.table import FusionTable, load_table
 from lfdfuse.viz import figures
 from lfdfuse.viz.load import PathData, load_log, table_steps
@@ -49,33 +48,8 @@ def save_figure(fig: Figure, path: str | Path) -> tuple[int, int]:
     with matplotlib.rc_context({"svg.hashsalt": "lfdfuse", "svg.fonttype": "path"}):
         fig.savefig(buf, format=fmt, dpi=DPI, metadata=meta)
     w, h = fig.get_size_inches() * DPI
-    _write_bytes_atomic(Path(path), buf.getvalue())
+    write_bytes_atomic(Path(path), buf.getvalue())
     return round(w), round(h)
-
-
-def _write_bytes_atomic(p: Path, data: bytes) -> None:
-    # lfdfuse.files writes text; images are bytes, so the same temp-file-and-rename here
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise LfdError(f"cannot write {p}: folder {parent} does not exist")
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=parent)
-    except OSError as exc:
-        raise LfdError(f"cannot write {p}: {exc.strerror}") from exc
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        mask = os.umask(0)
-        os.umask(mask)
-        os.chmod(tmp, 0o666 & ~mask)
-        os.replace(tmp, p)
-    except OSError as exc:
-        raise LfdError(f"cannot write {p}: {exc.strerror}") from exc
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
 
 
 def map_figure(data: PathData, *, title: str | None = None) -> Figure:
