@@ -9,6 +9,10 @@ side sector reach far), and how far it drove and how much it turned since some e
 * :func:`side_openings` — ``(N, B)`` scans → ``(N, 2)`` open flags (left, right).
 * :class:`OpeningTracker` — open flags → *onsets* with hysteresis (an opening is entered once,
   however the beams flicker at its edges); :func:`opening_onsets` runs it over a log.
+* :class:`OpeningSensor` — scans and odometry → onsets, with the side sectors held at the
+  heading the robot had ``lag_m`` metres of travel ago while it was in a corridor there (in a
+  room they turn with the robot); :func:`sensed_onsets` runs it over a log. This is what
+  segmentation and execution both use.
 * :func:`odometry_increments` — ``(N, 3)`` poses → distance (m) and signed heading change
   (rad) per step: relative motion only, as wheel odometry gives it.
 """
@@ -42,6 +46,25 @@ class OpeningParams:
     #: over openings that are not junctions passed
     steady_rad: float = math.radians(25.0)
     steady_ticks: int = 8
+    #: the sectors look from the heading the robot had this far back along its path. A teacher
+    #: who knows the way cuts a corner and turns into a side corridor before the opening is
+    #: abeam; a robot driving on with the style's weights meets it abeam. Held to the heading
+    #: from before the turn, both see the same openings (corners included), so the order of an
+    #: opening counted in the demo is the order the robot counts
+    lag_m: float = 2.0
+    #: the held sectors do not turn with the robot, so turning on the spot (round in a dead
+    #: end, in a room) would look steady: turning more than this over the last ``spin_m`` of
+    #: travel reads as closed too (a corner, even cut short, turns far less per metre)
+    spin_rad: float = math.radians(45.0)
+    spin_m: float = 0.5
+    #: the sectors are held only where the robot was in a corridor (the beams abeam, left plus
+    #: right, span at most ``open_m``) somewhere in the stretch from ``lag_m + corridor_back_m``
+    #: to ``lag_m - corridor_ahead_m`` of travel ago. In a room (wider than ``open_m``) the
+    #: robot turns round on the spot and the teacher turns where a target left them: there the
+    #: sectors turn with the robot, and the tracker's steadiness is the robot's own
+    corridor_back_m: float = 1.0
+    corridor_ahead_m: float = 0.5
+    corridor_beam_rad: float = math.radians(10.0)
 
 
 def side_openings(
@@ -99,6 +122,97 @@ class OpeningTracker:
             else:
                 self._run[s] = 0
         return onset[0], onset[1]
+
+
+class OpeningSensor:
+    """Onsets (left, right) from one scan and one odometry increment at a time.
+
+    The side sectors are turned to the heading of ``params.lag_m`` of travel ago (an in-place
+    turn does not move them until the robot drives on); the tracker's steadiness is that of
+    this held heading, so sectors swept as it catches up after a turn count no opening.
+    Only in corridors, though (:attr:`holding`): where the robot was in a room ``lag_m`` ago
+    the sectors turn with it, and turning there reads as turning.
+    """
+
+    def __init__(self, geometry: ScanGeometry, params: OpeningParams = OpeningParams()) -> None:
+        self.geometry = geometry
+        self.params = params
+        self.tracker = OpeningTracker(params)
+        self._odo_m = 0.0
+        self._heading = 0.0  # unwrapped, from the first tick
+        self._held = 0.0
+        self._path: deque[tuple[float, float]] = deque([(0.0, 0.0)])  # (odometry, heading)
+        self._corridor: deque[tuple[float, bool]] = deque()  # (odometry, in a corridor)
+        a = np.arctan2(np.sin(geometry.angles), np.cos(geometry.angles))
+        self._abeam = (
+            np.abs(a - math.pi / 2) <= params.corridor_beam_rad,
+            np.abs(a + math.pi / 2) <= params.corridor_beam_rad,
+        )
+        #: the sectors are held now (the robot was in a corridor ``lag_m`` ago)
+        self.holding = False
+        #: how far the robot has turned (rad, + = left) from the heading the sectors are held at
+        self.held_turn_rad = 0.0
+
+    def update(self, ranges_m: np.ndarray, step_m: float, turn_rad: float) -> tuple[bool, bool]:
+        """Onsets at this tick from its scan ``(B,)`` and odometry increment (m, rad)."""
+        self._odo_m += step_m
+        self._heading += turn_rad
+        self._path.append((self._odo_m, self._heading))
+        while len(self._path) > 1 and self._path[1][0] <= self._odo_m - self.params.lag_m:
+            self._path.popleft()
+        ranges = np.asarray(ranges_m, dtype=np.float64)
+        self._corridor.append((self._odo_m, self._in_corridor(ranges)))
+        back = self._odo_m - self.params.lag_m - self.params.corridor_back_m
+        while len(self._corridor) > 1 and self._corridor[1][0] <= back:
+            self._corridor.popleft()
+        ahead = self._odo_m - self.params.lag_m + self.params.corridor_ahead_m
+        self.holding = any(c for odo, c in self._corridor if odo <= ahead)
+        held = self._path[0][1] if self.holding else self._heading
+        held_turn, self._held = held - self._held, held
+        self.held_turn_rad = self._heading - held
+        flags = side_openings(
+            ranges[None, :],
+            self.geometry,
+            self.params,
+            offset_rad=np.array([held - self._heading]),
+        )[0]
+        if self.holding and self._spinning():
+            flags = np.zeros(2, dtype=bool)
+        return self.tracker.update(flags, held_turn)
+
+    def _in_corridor(self, ranges: np.ndarray) -> bool:
+        """Walls abeam on both sides, at most ``open_m`` apart (a beam with no return is far)."""
+        r = np.where(np.isfinite(ranges) & (ranges > 0.0), ranges, np.inf)
+        left, right = r[self._abeam[0]], r[self._abeam[1]]
+        if not len(left) or not len(right):
+            return False
+        return float(np.median(left) + np.median(right)) <= self.params.open_m
+
+    def _spinning(self) -> bool:
+        """Turned more than ``spin_rad`` over the last ``spin_m`` of travel."""
+        since = self._odo_m - self.params.spin_m
+        lo = min((h for odo, h in self._path if odo >= since), default=self._heading)
+        hi = max((h for odo, h in self._path if odo >= since), default=self._heading)
+        return hi - lo > self.params.spin_rad
+
+
+def sensed_onsets(
+    ranges_m: np.ndarray,
+    geometry: ScanGeometry,
+    step_m: np.ndarray,
+    turn_rad: np.ndarray,
+    params: OpeningParams = OpeningParams(),
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(N, 2)`` bool onsets and ``(N,)`` :attr:`OpeningSensor.held_turn_rad` from scans
+    ``(N, B)`` and odometry increments ``(N,)``, exactly as the live sensor sees them."""
+    sensor = OpeningSensor(geometry, params)
+    r = np.atleast_2d(np.asarray(ranges_m, dtype=np.float64))
+    onsets = np.zeros((len(r), 2), dtype=bool)
+    held = np.zeros(len(r))
+    for i in range(len(r)):
+        onsets[i] = sensor.update(r[i], float(step_m[i]), float(turn_rad[i]))
+        held[i] = sensor.held_turn_rad
+    return onsets, held
 
 
 def opening_onsets(

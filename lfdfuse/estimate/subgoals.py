@@ -101,14 +101,15 @@ def estimate_with_subgoals(
         for k, d in enumerate(mine):
             drive, turn = parts[2 * k], parts[2 * k + 1]
             tag = f"-{k + 1}" if len(mine) > 1 else ""
-            inner.append(
-                replace(
-                    drive,
-                    name=f"to-{d.side}-opening-{d.nth}{tag}",
-                    goal=None,
-                    landmark=Landmark("opening", d.side, d.nth, d.odometry_m),
+            if not d.at_start:
+                inner.append(
+                    replace(
+                        drive,
+                        name=f"to-{d.side}-opening-{d.nth}{tag}",
+                        goal=None,
+                        landmark=Landmark("opening", d.side, d.nth, d.odometry_m),
+                    )
                 )
-            )
             inner.append(
                 replace(
                     turn,

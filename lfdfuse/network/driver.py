@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from lfdfuse.behaviors.landmarks import OpeningTracker, side_openings
+from lfdfuse.behaviors.landmarks import OpeningSensor
 from lfdfuse.behaviors.primitives import ATTRACT, BehaviorParams, Observations, compute
 from lfdfuse.control.drive import heading_to_command
 from lfdfuse.control.safety import SafetyParams, free_heading
@@ -98,7 +98,7 @@ class NetworkDriver:
         self.side: dict[str, list[tuple[float, float]]] = defaultdict(list)
         self._il = side_beam_index(self.geometry.angles, math.pi / 2)
         self._ir = side_beam_index(self.geometry.angles, -math.pi / 2)
-        self.openings = OpeningTracker()  # landmark cues for sub-goal steps (issue 15)
+        self.openings = OpeningSensor(self.geometry)  # landmark cues for sub-goal steps (issue 15)
         self._odom: tuple[float, float, float] | None = None
 
     @property
@@ -117,9 +117,8 @@ class NetworkDriver:
             step_m = math.hypot(p.x - x, p.y - y)
             turn = math.atan2(math.sin(p.theta - th), math.cos(p.theta - th))
         self._odom = (p.x, p.y, p.theta)
-        flags = side_openings(observation.reading.ranges_m[None, :], self.geometry, self.openings.params)[0]
-        left, right = self.openings.update(flags, turn)
-        return Cues(left, right, step_m, turn)
+        left, right = self.openings.update(observation.reading.ranges_m, step_m, turn)
+        return Cues(left, right, step_m, turn, self.openings.held_turn_rad)
 
     def command(self, observation: Observation) -> tuple[float, float]:
         reading = observation.reading

@@ -7,11 +7,17 @@ it* (the weights the teacher turned with), each ended by a landmark the robot re
 its own sensors — never map coordinates:
 
 ``{opening: left, nth: 1, odometry_m: 7.9}``
-    met at the onset of the ``nth`` opening on the left since the step began
-    (``odometry_m``: how far the teacher had driven by then, for reading; not used to match —
-    distances change from building to building, the order of openings does not);
+    met at the onset of the ``nth`` (or a later) opening on the left since the step began, once
+    the robot has driven at least half of ``odometry_m`` (how far the teacher had driven by
+    then). The order of openings is what carries over to another building; the distance only
+    keeps an opening counted too early (a flicker, a corner taken wide) from triggering the
+    turn-off far before the place — half of it, since distances change from building to
+    building;
 ``{turned: left, angle_rad: 1.2}``
-    met once the robot has turned that far toward that side since the step began.
+    met once the robot has turned that far toward that side from its heading before the turn:
+    the heading the opening sectors were held at when the step began (a robot that meets the
+    opening driving straight and a teacher who began to turn early end the turn on the same
+    heading).
 
 :class:`Progress` is what a running step has sensed since it began; :meth:`Landmark.met`
 decides from it.
@@ -21,7 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 from lfdfuse.behaviors.landmarks import SIDES
 from lfdfuse.errors import ConfigError
@@ -35,6 +41,7 @@ class Cues:
     onset_right: bool = False
     step_m: float = 0.0
     turn_rad: float = 0.0  # + = left
+    held_turn_rad: float = 0.0  # turned since the heading the opening sectors are held at
 
 
 @dataclass
@@ -47,8 +54,9 @@ class Progress:
     onset: tuple[bool, bool] = (False, False)  # at this tick
 
     @staticmethod
-    def fresh() -> Progress:
-        return Progress([0, 0])
+    def fresh(turned_rad: float = 0.0) -> Progress:
+        """Nothing passed yet; ``turned_rad`` already turned (from the held heading)."""
+        return Progress([0, 0], turned_rad=turned_rad)
 
     def add(self, cues: Cues) -> None:
         self.onset = (cues.onset_left, cues.onset_right)
@@ -67,11 +75,14 @@ class Landmark:
     nth: int = 1
     odometry_m: float | None = None
     angle_rad: float = 0.0
+    #: an opening matches only after this share of ``odometry_m`` has been driven
+    ODOMETRY_SHARE: ClassVar[float] = 0.5
 
     def met(self, p: Progress) -> bool:
         s = SIDES.index(self.side)
         if self.kind == "opening":
-            return p.onset[s] and p.openings[s] >= self.nth
+            far_enough = self.odometry_m is None or p.travelled_m >= self.ODOMETRY_SHARE * self.odometry_m
+            return p.onset[s] and p.openings[s] >= self.nth and far_enough
         sign = 1.0 if self.side == "left" else -1.0
         return sign * p.turned_rad >= self.angle_rad
 

@@ -86,14 +86,16 @@ class NetworkRuntime:
         """One tick: ``outputs`` of the table's behaviours (N = 1), ``reached`` targets now,
         ``cues`` the landmark cues of this tick (openings, odometry; None: nothing sensed)."""
         achieved_now: list[str] = []
-        self.progress.add(cues or Cues())
+        cues = cues or Cues()
+        self.progress.add(cues)
         found = self.active()
         while found is not None:
             done = self._achieved_by(found[0], reached)
             if done is None:
                 break
             self.achieved.add(done)
-            self.progress = Progress.fresh()  # a sub-goal's landmark counts from its step's start
+            # a sub-goal's landmark counts from its step's start; a turn, from the heading held then
+            self.progress = Progress.fresh(cues.held_turn_rad)
             goal = self._step_at(done).goal
             if goal is not None:
                 achieved_now.append(goal)

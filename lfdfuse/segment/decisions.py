@@ -9,8 +9,10 @@ turns that way, at an opening on that side. Each decision splits the goal segmen
 robot recognises from its own sensors (:mod:`lfdfuse.behaviors.landmarks`): the order of the
 opening among those on that side since the sub-segment began, and the heading change.
 
-Step ``d`` (the opening's onset) is the first step of the turn, step ``e`` (the turn landmark
-met) the first step after it, exactly as the runtime switches steps.
+Step ``d`` (the opening's onset) is where the robot begins the turn, step ``e`` (the turn
+landmark met) the first step after it, exactly as the runtime switches steps. The turn's
+weights are learned from where the teacher began to turn away from the learned fusion, if
+that was earlier (``begin``).
 """
 
 from __future__ import annotations
@@ -24,8 +26,7 @@ from lfdfuse.behaviors.landmarks import (
     SIDES,
     OpeningParams,
     odometry_increments,
-    opening_onsets,
-    side_openings,
+    sensed_onsets,
 )
 from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.sim.sensors import ScanGeometry
@@ -39,6 +40,7 @@ class LandmarkTrack:
     onsets: np.ndarray
     step_m: np.ndarray
     turn_rad: np.ndarray
+    held_rad: np.ndarray  # (N,) heading turned since the heading the sectors are held at (+ = left)
     ranges_m: np.ndarray
     geometry: ScanGeometry
     params: OpeningParams
@@ -49,24 +51,39 @@ def landmark_track(
 ) -> LandmarkTrack:
     """Cues from scans ``(N, B)`` and odometry poses ``(N, 3)`` (only their increments are used)."""
     step_m, turn = odometry_increments(pose)
-    onsets = opening_onsets(side_openings(ranges_m, geometry, params), turn, params)
-    return LandmarkTrack(onsets, step_m, turn, np.asarray(ranges_m), geometry, params)
+    onsets, held = sensed_onsets(ranges_m, geometry, step_m, turn, params)
+    return LandmarkTrack(onsets, step_m, turn, held, np.asarray(ranges_m), geometry, params)
 
 
-def _steady_onset(track: LandmarkTrack, side: int, lo: int, hi: int) -> int | None:
-    """The first onset on ``side`` in ``[lo, hi)`` with the sectors held at step ``lo``'s heading.
+def _onset_near(track: LandmarkTrack, side: int, lo: int, hi: int, at: int, tol: float) -> int | None:
+    """The first onset on ``side`` in ``[lo, hi)`` met while the teacher had turned toward that
+    side by more than ``tol`` from the held heading (the opening they turned into: the robot,
+    driving on, meets it there; a later onset as the teacher weaves out of the turn is one the
+    robot may never see), else the onset nearest step ``at`` (the divergence's start).
 
-    A teacher who knows the way starts to turn before the opening is abeam; the robot, driving
-    on with the style's weights, meets it abeam. Holding the sectors to the heading before the
-    turn finds the step where the robot will see it.
+    The sectors are held at the heading from before a turn (:class:`OpeningSensor`), so the
+    onset is where a robot driving on with the style's weights meets the opening, though the
+    teacher began to turn earlier.
     """
-    if hi <= lo:
+    hit = lo + np.nonzero(track.onsets[lo:hi, side])[0]
+    if not len(hit):
         return None
-    heading = np.cumsum(track.turn_rad[lo:hi]) - track.turn_rad[lo]
-    flags = side_openings(track.ranges_m[lo:hi], track.geometry, track.params, offset_rad=-heading)
-    onsets = opening_onsets(flags, np.zeros(hi - lo), track.params)
-    hit = np.nonzero(onsets[:, side])[0]
-    return lo + int(hit[0]) if len(hit) else None
+    sgn = 1.0 if side == 0 else -1.0
+    turning = hit[sgn * track.held_rad[hit] >= tol]
+    if len(turning):
+        return int(turning[0])
+    return int(hit[np.argmin(np.abs(hit - at))])
+
+
+def _turn_began(heading: np.ndarray, held_rad: np.ndarray, d: int, lo: int, sgn: float, tol: float) -> int:
+    """The first step of the teacher's turn toward ``sgn`` that is under way at step ``d``: the
+    start of the run of steps in ``[lo, d]`` turned more than ``tol`` from ``d``'s held heading."""
+    held = heading[d] - held_rad[d]
+    off = sgn * (heading[lo : d + 1] - held) > tol
+    if not off[-1]:
+        return d
+    before = np.nonzero(~off)[0]
+    return lo + (int(before[-1]) + 1 if len(before) else 0)
 
 
 @dataclass(frozen=True)
@@ -80,8 +97,15 @@ class DecisionParams:
     lookback: int = 60  # the opening's onset at most this many steps before the divergence
     lookahead: int = 20  # or this many steps after it (the teacher began to turn early)
     turn_share: float = 0.8  # the turn landmark: this share of the teacher's turn
+    turn_after_rad: float = math.radians(30.0)  # ... and this far beyond its turn at the onset
     min_angle_rad: float = math.radians(40.0)
     max_angle_rad: float = math.radians(150.0)
+    #: an opening met within this distance of the sub-segment's start is no place passed on
+    #: the way: the teacher turned where the previous goal left them (round at a target in a
+    #: room). The decision is then the turn alone, from the start — counting openings seen
+    #: while turning on the spot would not carry over to the robot
+    at_start_m: float = 0.5
+    began_rad: float = math.radians(8.0)  # the teacher's turn began where it left the held heading by this
 
 
 @dataclass(frozen=True)
@@ -97,6 +121,11 @@ class DecisionPoint:
     odometry_m: float
     angle_rad: float
     divergence_rad: float  # mean |demo − fused| over the divergence: why it is a decision
+    at_start: bool = False  # the turn alone, from ``since`` (no opening to drive on to)
+    #: first step the turn's weights are learned from: the teacher's turn may begin before the
+    #: opening's onset (they knew it was coming); learned from the onset, a turn already half
+    #: done would teach the style's steering, not the turn
+    begin: int = -1
 
 
 def _runs(mask: np.ndarray, sign: np.ndarray, max_gap: int) -> list[tuple[int, int, float]]:
@@ -156,24 +185,35 @@ def find_decisions(
             turned = sgn * np.cumsum(track.turn_rad[ref + 1 : min(b + 25, hi)])
             if not len(turned) or turned.max() < p.min_turn_rad:
                 continue  # the teacher did not really turn that way
-            d = _steady_onset(track, s, ref, min(b + p.lookahead, hi))
+            d = _onset_near(track, s, ref, min(b + p.lookahead, hi), a, p.began_rad)
             if d is None:
                 continue  # no opening the robot could recognise: not expressible as a landmark
-            # the turn landmark, from the heading before the turn (the robot meets the opening
-            # driving on): this share of the teacher's largest turn toward the side
-            angle = float(np.clip(p.turn_share * turned.max(), p.min_angle_rad, p.max_angle_rad))
-            after = sgn * np.cumsum(track.turn_rad[d + 1 : min(b + 25, hi)])
-            before = sgn * float(track.turn_rad[ref + 1 : d + 1].sum())
-            reach = np.nonzero(before + after >= angle)[0]
+            nth = int(track.onsets[since:d, s].sum()) + 1
+            odo = float(track.step_m[since : d + 1].sum())
+            at_start = odo < p.at_start_m
+            if at_start:
+                d = since  # the turn step is all of it: the robot turns where the goal left it
+            # the turn landmark counts from the heading the sectors were held at when the turn
+            # step began (the heading before the turn, for teacher and robot alike, however
+            # early either began to turn): this share of the teacher's largest turn from it
+            heading = np.cumsum(track.turn_rad)
+            from_held = sgn * (heading[d : min(b + 25, hi)] - heading[d] + track.held_rad[d])
+            # ... and at least ``turn_after_rad`` beyond where the teacher had turned at the onset
+            # (met mid-turn, a share of the whole would leave the step a sliver of the turn), but
+            # never beyond the teacher's whole turn
+            want = max(p.turn_share * from_held.max(), min(from_held[0] + p.turn_after_rad, from_held.max()))
+            angle = float(np.clip(want, p.min_angle_rad, p.max_angle_rad))
+            reach = np.nonzero(from_held[1:] >= angle)[0]
             if not len(reach):
                 continue
             end = d + 1 + int(reach[0])
             if end + 1 >= hi:
                 continue  # the goal came first: nothing left to steer after the turn
-            nth = int(track.onsets[since:d, s].sum()) + 1
-            odo = float(track.step_m[since : d + 1].sum())
             div = float(np.abs(raw[a:b][valid[a:b]]).mean())
-            out.append(DecisionPoint(seg.index, SIDES[s], d, end, nth, since, odo, angle, div))
+            begin = _turn_began(heading, track.held_rad, d, max(since, d - p.lookback), sgn, p.began_rad)
+            out.append(
+                DecisionPoint(seg.index, SIDES[s], d, end, nth, since, odo, angle, div, at_start, begin)
+            )
             since = end
     return out
 
@@ -185,7 +225,9 @@ def split_segments(
     sub-segment of a goal segment keeps its goal. Indices are renumbered."""
     out: list[tuple[int, GoalSegment]] = []
     for seg in segments:
-        cuts = [(d.onset, d.turn_end) for d in decisions if d.segment == seg.index]
+        cuts = [
+            (d.begin if d.begin >= 0 else d.onset, d.turn_end) for d in decisions if d.segment == seg.index
+        ]
         bounds = [seg.start]
         for d, e in cuts:
             bounds += [d, e]

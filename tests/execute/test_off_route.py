@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 import yaml
 
-from lfdfuse.behaviors.landmarks import OpeningParams, opening_onsets, side_openings
+from lfdfuse.behaviors.landmarks import OpeningParams, OpeningSensor, opening_onsets, side_openings
 from lfdfuse.errors import ConfigError
 from lfdfuse.network.landmarks import Cues, Landmark, Progress
 from lfdfuse.network.runtime import NetworkRuntime
@@ -130,6 +130,19 @@ def test_openings_are_seen_on_their_side_and_counted_once() -> None:
     assert not turning.any()  # sectors swept while turning round are not junctions passed
 
 
+def test_sectors_are_held_in_corridors_and_turn_with_the_robot_in_rooms() -> None:
+    geom = LaserParams().geometry
+    corridor, room = OpeningSensor(geom), OpeningSensor(geom)
+    for _ in range(40):  # 4 m straight on
+        corridor.update(np.full(geom.count, 1.2), 0.1, 0.0)
+        room.update(np.full(geom.count, 2.4), 0.1, 0.0)
+    for _ in range(10):  # turn left on the spot
+        corridor.update(np.full(geom.count, 1.2), 0.0, math.radians(9))
+        room.update(np.full(geom.count, 2.4), 0.0, math.radians(9))
+    assert corridor.holding and math.isclose(corridor.held_turn_rad, math.radians(90))
+    assert not room.holding and room.held_turn_rad == 0.0
+
+
 def test_progress_counts_per_side() -> None:
     p = Progress.fresh()
     p.add(Cues(onset_left=True, step_m=0.5, turn_rad=-0.1))
@@ -153,4 +166,16 @@ def test_a_turn_into_an_office_off_the_route_is_reproduced(office: tuple[Path, P
     assert inner.steps[0].landmark is not None and inner.steps[0].landmark.side == "right"
     starts = perturbed_starts(load_world(case.world), 1, seed=15)
     rows = run_starts(table, case, starts=starts, folder=tmp, label="sub")
+    assert all(r["completed"] and r["collisions"] == 0 for r in rows), rows
+
+
+def test_a_turn_into_a_dead_end_spur_off_the_route_is_reproduced(tmp_path: Path) -> None:
+    case = CASES["ring-spur"]
+    seg = demonstrate(case, folder=tmp_path)
+    table = learn(seg, subgoals=True)
+    inner = table.network.steps[1].network
+    assert inner is not None, "the turn into the spur is a decision point"
+    assert inner.steps[0].landmark is not None and inner.steps[0].landmark.side == "left"
+    starts = perturbed_starts(load_world(case.world), 2, seed=15)
+    rows = run_starts(table, case, starts=starts, folder=tmp_path, label="sub")
     assert all(r["completed"] and r["collisions"] == 0 for r in rows), rows
