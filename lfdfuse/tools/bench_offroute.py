@@ -12,8 +12,9 @@ runs from the teacher's start and from starts perturbed by up to ±0.5 m and ±2
 from __future__ import annotations
 
 import math
+import sys
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -154,4 +155,21 @@ def run(quick: bool = False) -> list[dict[str, Any]]:
                 table = learn(seg, subgoals=sub)
                 label = f"{case.world}/{'subgoals' if sub else 'reactive'}"
                 rows += run_starts(table, case, starts=starts, folder=folder, label=label)
+                if case.world in TRANSFER:
+                    # learned in one building, run in another of the same topology and other sizes
+                    other, max_time_s = TRANSFER[case.world]
+                    far = perturbed_starts(load_world(other), n, seed=15)
+                    longer = replace(case, max_time_s=max_time_s)
+                    rows += run_starts(
+                        table, longer, world=other, starts=far, folder=folder, label=f"{label}->{other}"
+                    )
     return rows
+
+
+#: transfer runs: learned in the key's world, run in (world, time limit) — a larger building needs longer
+TRANSFER = {"ring-spur": ("ring-spur-large", 600.0)}
+
+
+if __name__ == "__main__":
+    for row in run(quick="--quick" in sys.argv):
+        print(row)
