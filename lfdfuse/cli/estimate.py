@@ -41,6 +41,11 @@ def estimate_cmd(
         "paper", "--likelihood", help="paper filter's likelihood: paper (2 - D/2, as published) or vonmises."
     ),
     seed: int = typer.Option(0, "--seed", help="Seed of the filters' random draws."),
+    subgoals: bool = typer.Option(
+        False,
+        "--subgoals",
+        help="Turn-offs the teacher took into an opening (a spur, a room) become landmark sub-goal steps.",
+    ),
     out: Path = typer.Option(Path("fusion.yaml"), "--out", "-o", help="Output fusion table (YAML)."),
 ) -> None:
     """Estimate fusion weights per goal segment and BAC, and write the behaviour network.
@@ -64,7 +69,7 @@ def estimate_cmd(
     smc = replace(SMCParams(), particles=particles)
     opts = EstimateOptions(method=method, trials=trials, seed=seed, pf=pf, smc=smc)  # type: ignore[arg-type]
     with progress_bar("estimate") as update:
-        res = estimate_file(src, out=out, opts=opts, progress=update)
+        res = estimate_file(src, out=out, opts=opts, progress=update, subgoals=subgoals)
     console.print(
         f"[bold]estimate[/bold] {src} → {res.out}  ({method}, {trials} trial{'s' if trials > 1 else ''}, {res.groups} groups)"
     )

@@ -305,9 +305,18 @@ def estimate_file(
     out: str | Path,
     opts: EstimateOptions,
     progress: Callable[[float, float], None] | None = None,
+    subgoals: bool = False,
 ) -> EstimateResult:
-    """Read a segmented log, estimate, and write the fusion table to ``out``."""
+    """Read a segmented log, estimate, and write the fusion table to ``out``.
+
+    With ``subgoals`` the demo's decision points (turns the teacher took into an opening the
+    learned fusion would pass by) become landmark sub-goal steps (:mod:`lfdfuse.estimate.subgoals`).
+    """
     run = read_segmented(src)
     table, n, skipped = estimate_run(run, opts=opts, name=Path(src).name, progress=progress)
+    if subgoals:
+        from lfdfuse.estimate.subgoals import estimate_with_subgoals, track_of
+
+        table = estimate_with_subgoals(run, track_of(src, run), opts=opts, name=Path(src).name).table
     write_table(table, out)
     return EstimateResult(table, str(out), n, skipped)

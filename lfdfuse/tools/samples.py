@@ -17,6 +17,8 @@ from lfdfuse.world.model import load_world
 
 #: The paper's first physical scenario: left to goal 1, centre to goal 2, right to goal 3.
 THREE_GOALS = [Leg("red", "keep-left"), Leg("green", "keep-center"), Leg("blue", "keep-right")]
+#: Goals off the route (issue 15): green sits in an office off the corridor a left-keeper follows.
+OFFICE = [Leg("red", "keep-left"), Leg("green", "keep-left"), Leg("blue", "keep-left")]
 
 
 def task_yaml(legs: list[Leg]) -> str:
@@ -28,6 +30,7 @@ def task_yaml(legs: list[Leg]) -> str:
 def generate(folder: Path) -> list[Path]:
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "three-goals.task.yaml").write_text(task_yaml(THREE_GOALS))
+    (folder / "office-room.task.yaml").write_text(task_yaml(OFFICE))
     building = load_world("building")
     runs = [
         (

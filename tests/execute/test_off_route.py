@@ -179,3 +179,19 @@ def test_a_turn_into_a_dead_end_spur_off_the_route_is_reproduced(tmp_path: Path)
     starts = perturbed_starts(load_world(case.world), 2, seed=15)
     rows = run_starts(table, case, starts=starts, folder=tmp_path, label="sub")
     assert all(r["completed"] and r["collisions"] == 0 for r in rows), rows
+
+
+def test_estimate_subgoals_from_the_command_line(office: tuple[Path, Path], tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from lfdfuse.cli.main import app
+    from lfdfuse.network.table import load_table
+
+    _tmp, seg = office
+    out = tmp_path / "o.yaml"
+    res = CliRunner().invoke(app, ["estimate", str(seg), "--subgoals", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    steps = load_table(out).network.steps
+    assert any(s.network is not None and any(x.landmark is not None for x in s.network.steps) for s in steps)
+    shown = CliRunner().invoke(app, ["inspect", str(out)])
+    assert shown.exit_code == 0 and "opening on the" in shown.output
