@@ -105,9 +105,8 @@ def _pf_rows(
     per_pass = max(1, CHAIN_BATCH // k)
     for b in range(0, len(todo), per_pass):
         batch = todo[b : b + per_pass]
-        smc = TemperedSMC(
-            [row_data(*problems[i]) for i in batch], trials=k, model=opts.model, params=opts.smc, rng=rng
-        )
+        datas = [row_data(*problems[i]) for i in batch]
+        smc = TemperedSMC(datas, trials=k, model=opts.model, params=opts.smc, rng=rng)
         res = smc.run()
         means, covs, particles = res.mean(), res.cov(), res.weights
         for j, i in enumerate(batch):
@@ -118,9 +117,8 @@ def _pf_rows(
                 # the data pins the row: report the posterior mode (the most likely posterior
                 # particle), which lands as close to the truth as a heading fit; a posterior mean
                 # is pulled off the simplex's edges, where sparse rows live, by the posterior's width
-                data = row_data(*problems[i])
                 w = particles[j * k : (j + 1) * k, :, :n]  # (K, M, n)
-                best = np.array([trial[int(np.argmax(sum_cos(data, trial)))] for trial in w])  # (K, n)
+                best = np.array([trial[int(np.argmax(sum_cos(datas[j], trial)))] for trial in w])  # (K, n)
             else:
                 # the data leaves a direction open: the posterior mean, where the prior decides it
                 best = means[j * k : (j + 1) * k, :n]

@@ -23,6 +23,7 @@ import numpy as np
 
 from lfdfuse.errors import LogError
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
+from lfdfuse.estimate.replay import fused_vectors
 from lfdfuse.log.reader import read_run
 from lfdfuse.network.landmarks import Landmark
 from lfdfuse.network.table import FusionTable, Network, Step
@@ -45,20 +46,6 @@ def track_of(path: str | Path, run: SegmentedRun) -> LandmarkTrack:
     return landmark_track(raw.ranges_m, raw.geometry, raw.pose)
 
 
-def fused_vectors(table: FusionTable, run: SegmentedRun) -> np.ndarray:
-    """``(N, 2)`` the fusion of each goal segment's step replayed over the demo's behaviour outputs."""
-    out = np.zeros((len(run.t_ns), 2))
-    index = {b: i for i, b in enumerate(table.behaviors)}
-    for seg, step in zip(run.segments, table.network.steps, strict=True):
-        fallback = step.default_weights if step.default_weights is not None else table.default_weights
-        for t in range(seg.start, seg.stop):
-            row = step.row(int(run.bac[t]))
-            weights = row.weights if row is not None else fallback
-            for name, w in weights.items():
-                out[t] += w * run.vectors[t, index[name]]
-    return out
-
-
 @dataclass(frozen=True)
 class SubgoalResult:
     table: FusionTable
@@ -79,7 +66,7 @@ def estimate_with_subgoals(
         segments=run.segments,
         demo=run.demo,
         informative=run.informative,
-        fused=fused_vectors(table, run),
+        fused=fused_vectors(table, run, np.arange(len(run.t_ns))),
         track=track,
         params=params,
     )

@@ -27,7 +27,7 @@ import numpy as np
 
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
-from lfdfuse.evaluate.replay import fused_vectors
+from lfdfuse.estimate.replay import fused_vectors
 from lfdfuse.network.table import FusionTable
 from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.segment.read import SegmentedRun

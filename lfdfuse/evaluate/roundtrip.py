@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from lfdfuse.estimate.baselines import angle_errors, heading_fit_weights
-from lfdfuse.evaluate.replay import fused_vectors, leaf_steps, runtime_weights
+from lfdfuse.estimate.replay import fused_vectors, leaf_steps, runtime_weights
 from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.network.table import FusionTable, Step, load_table
 from lfdfuse.segment.pipeline import segment_file

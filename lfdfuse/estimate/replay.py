@@ -1,5 +1,8 @@
 """Replaying a fusion table over a segmented log: the fused vector the runtime would steer by.
 
+Used where a learned table is compared with the demonstration: decision points for sub-goals
+(:mod:`lfdfuse.estimate.subgoals`), round trips and held-out prediction (:mod:`lfdfuse.evaluate`).
+
 The weights are those execute uses (DESIGN §8): the step's row for the BAC, else the step's
 default weights, else the table's; where a row's fused vector is zero, the fallback's. The
 table's network step ``i`` serves the log's goal segment ``i + segment_offset``; a segment the
