@@ -71,3 +71,176 @@ def test_only_viz_imports_matplotlib() -> None:
                 if n.startswith("lfdfuse.viz") and parts[0] != "viz":
                     # the CLI imports viz lazily, inside a function, so `lfdfuse --help` stays fast
                     assert parts[0] == "cli" and node.col_offset > 0, f"{path} imports {n} at module level"
+
+
+# --- the import graph: every import counts (module level, lazy, TYPE_CHECKING) ---------------
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(LIB.parent).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def _modules() -> dict[str, Path]:
+    return {_module_name(p): p for p in sorted(LIB.rglob("*.py"))}
+
+
+def _resolve(name: str, modules: dict[str, Path]) -> str | None:
+    """The lfdfuse module a dotted name lives in (the longest prefix that is a module)."""
+    while name:
+        if name in modules:
+            return name
+        name = name.rpartition(".")[0]
+    return None
+
+
+def _imports_of(module: str, path: Path, modules: dict[str, Path]) -> set[str]:
+    """Every lfdfuse module `module` imports, wherever the import statement sits.
+
+    `from pkg import name` counts as an import of `pkg` (its `__init__` runs) and, when `name`
+    is itself a module, of `pkg.name` too; relative imports are resolved against `module`.
+    """
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        targets: list[str] = []
+        if isinstance(node, ast.Import):
+            targets = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")[: len(package.split(".")) - (node.level - 1)]
+                base = ".".join([*anchor, base] if base else anchor)
+            targets = [base] + [f"{base}.{a.name}" for a in node.names]
+        for t in targets:
+            resolved = _resolve(t, modules)
+            if resolved is not None and resolved != module:
+                found.add(resolved)
+    return found
+
+
+def _import_graph() -> dict[str, set[str]]:
+    modules = _modules()
+    return {m: _imports_of(m, p, modules) for m, p in modules.items()}
+
+
+def _strongly_connected(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Tarjan's algorithm, iterative; components of more than one module (or a self-loop)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    out: list[list[str]] = []
+    counter = 0
+    for root in sorted(graph):
+        if root in index:
+            continue
+        work: list[tuple[str, list[str]]] = [(root, sorted(graph[root]))]
+        index[root] = low[root] = counter
+        counter += 1
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, todo = work[-1]
+            if todo:
+                nxt = todo.pop(0)
+                if nxt not in index:
+                    index[nxt] = low[nxt] = counter
+                    counter += 1
+                    stack.append(nxt)
+                    on_stack.add(nxt)
+                    work.append((nxt, sorted(graph.get(nxt, ()))))
+                elif nxt in on_stack:
+                    low[node] = min(low[node], index[nxt])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                comp: list[str] = []
+                while True:
+                    w = stack.pop()
+                    on_stack.discard(w)
+                    comp.append(w)
+                    if w == node:
+                        break
+                if len(comp) > 1 or node in graph.get(node, ()):
+                    out.append(sorted(comp))
+    return out
+
+
+def _cycle_path(graph: dict[str, set[str]], component: list[str]) -> list[str]:
+    """One concrete cycle through the component's first module, as a path a -> b -> ... -> a."""
+    members = set(component)
+    start = component[0]
+    parent: dict[str, str] = {}
+    frontier = [start]
+    while frontier:
+        nxt: list[str] = []
+        for node in frontier:
+            for dep in sorted(graph[node] & members):
+                if dep == start:
+                    path = [start]
+                    while node != start:
+                        path.append(node)
+                        node = parent[node]
+                    return [start, *reversed(path[1:]), start]
+                if dep not in parent:
+                    parent[dep] = node
+                    nxt.append(dep)
+        frontier = nxt
+    return component
+
+
+def test_strongly_connected_finds_a_planted_cycle() -> None:
+    """The finder itself: a chain has no cycle; closing it makes one component, reported as a path."""
+    chain = {"a": {"b"}, "b": {"c"}, "c": set(), "d": {"a"}}
+    assert _strongly_connected(chain) == []
+    looped = {**chain, "c": {"a"}}
+    comps = _strongly_connected(looped)
+    assert comps == [["a", "b", "c"]]
+    assert _cycle_path(looped, comps[0]) == ["a", "b", "c", "a"]
+
+
+def test_import_graph_sees_lazy_and_type_checking_imports(tmp_path: Path) -> None:
+    """The walk must see imports inside functions and under `if TYPE_CHECKING:`, relative ones too."""
+    modules = {"lfdfuse.p": LIB, "lfdfuse.p.a": LIB, "lfdfuse.p.b": LIB, "lfdfuse.q": LIB}
+    src = (
+        "from typing import TYPE_CHECKING\n"
+        "if TYPE_CHECKING:\n    from lfdfuse.q import Thing\n"
+        "def f():\n    from .b import g\n    return g\n"
+    )
+    package_probe = "def h():\n    from . import b\n    return b\n"
+    probe = tmp_path / "a.py"
+    probe.write_text(src)
+    found = _imports_of("lfdfuse.p.a", probe, modules)
+    assert found == {"lfdfuse.q", "lfdfuse.p.b"}
+    probe.write_text(package_probe)
+    # `from . import b` runs the package's __init__ first: it counts as importing the package too
+    assert _imports_of("lfdfuse.p.a", probe, modules) == {"lfdfuse.p", "lfdfuse.p.b"}
+
+
+def test_no_import_cycles() -> None:
+    """Zero cycles inside lfdfuse/, counting lazy imports, TYPE_CHECKING imports and package re-exports.
+
+    A lazy import is a cycle in disguise (STYLE, lessons): move the shared thing below both.
+    """
+    graph = _import_graph()
+    cycles = [" -> ".join(_cycle_path(graph, c)) for c in _strongly_connected(graph)]
+    assert not cycles, "import cycles in lfdfuse/:\n  " + "\n  ".join(cycles)
+
+
+def test_viz_imports_no_stage() -> None:
+    """viz/ draws from data it is handed: it imports no stage that produces the data."""
+    stages = ("lfdfuse.segment", "lfdfuse.estimate", "lfdfuse.execute", "lfdfuse.sources")
+    graph = _import_graph()
+    bad = sorted(
+        f"{m} imports {dep}"
+        for m, deps in graph.items()
+        if m.startswith("lfdfuse.viz")
+        for dep in deps
+        if any(dep == s or dep.startswith(s + ".") for s in stages)
+    )
+    assert not bad, "viz/ imports stages:\n  " + "\n  ".join(bad)
