@@ -45,7 +45,10 @@ def fit_error_deg(vectors: np.ndarray, demo: np.ndarray, bac: np.ndarray) -> tup
             fused[:, 0] * demo[rows, 1] - fused[:, 1] * demo[rows, 0],
             fused[:, 0] * demo[rows, 0] + fused[:, 1] * demo[rows, 1],
         )
-        errors.append(np.abs(err))
+        # a zero fused vector (nnls found no non-negative fit) has no heading: arctan2 of signed
+        # zeros would call it 0° or 180° at random; count it as 90°, a random heading's mean error
+        zero = (fused[:, 0] == 0) & (fused[:, 1] == 0)
+        errors.append(np.where(zero, np.pi / 2, np.abs(err)))
     if not errors:
         return float("nan"), 0
     allerr = np.concatenate(errors)
