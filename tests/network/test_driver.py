@@ -1,0 +1,89 @@
+"""The network as a command source: commands within the drive's limits, reproducible, and it
+refuses only the targets that carry weight."""
+
+from __future__ import annotations
+
+import copy
+from typing import Any
+
+import numpy as np
+import pytest
+
+from lfdfuse.errors import ConfigError
+from lfdfuse.network.driver import NetworkDriver, check_table_world, weighted_targets
+from lfdfuse.network.table import parse_table
+from lfdfuse.sim.loop import run
+from lfdfuse.sim.sensors import SensorParams
+from lfdfuse.sim.simulator import Simulator
+from lfdfuse.world.model import load_world
+
+TABLE: dict[str, Any] = {
+    "format": "lfdfuse/fusion-table@1",
+    "behaviors": ["avoid", "attract_red", "wander", "attract_blue", "attract_green"],
+    "default_weights": {"avoid": 0.5, "wander": 0.5},
+    "network": {
+        "name": "t",
+        "steps": [
+            {
+                "name": "reach-red",
+                "goal": {"target": "red"},
+                "default_weights": {"wander": 1.0, "attract_red": 1.0},
+                "fusion": [{"bac": 0b0111, "weights": {"avoid": 0.2, "attract_red": 0.7, "wander": 0.1}}],
+            },
+            {
+                "name": "reach-blue",
+                "goal": {"target": "blue"},
+                "fusion": [
+                    {"bac": 0b11101, "weights": {"avoid": 0.3, "attract_blue": 0.7, "attract_green": 0.0}}
+                ],
+            },
+        ],
+    },
+}
+
+
+def test_weighted_targets_are_those_of_attract_behaviours_with_weight() -> None:
+    assert weighted_targets(parse_table(TABLE)) == ["red", "blue"]
+    zero_blue = copy.deepcopy(TABLE)
+    zero_blue["network"]["steps"][1]["fusion"][0]["weights"] = {"avoid": 1.0, "attract_blue": 0.0}
+    assert weighted_targets(parse_table(zero_blue)) == ["red"]
+
+
+def test_a_world_lacking_a_weighted_target_is_refused_by_name() -> None:
+    table = parse_table(TABLE)
+    check_table_world(table, load_world("building"))  # red and blue: fine (green carries no weight)
+    with pytest.raises(ConfigError, match=r"targets red, blue that world 'corridor' lacks \(it has: none\)"):
+        check_table_world(table, load_world("corridor"))
+    with pytest.raises(ConfigError):
+        NetworkDriver(
+            table=table, world=load_world("corridor"), sensors=SensorParams(), rng=np.random.default_rng(0)
+        )
+
+
+def _drive(seed: int, noise: float) -> tuple[np.ndarray, NetworkDriver]:
+    world, sensors = load_world("building"), SensorParams()
+    rng = np.random.default_rng(seed)
+    driver = NetworkDriver(
+        table=parse_table(TABLE), world=world, sensors=sensors, rng=rng, heading_noise_rad=noise
+    )
+    commands: list[tuple[float, float]] = []
+
+    class _Tap:
+        def record(self, obs: Any, command: tuple[float, float]) -> None:
+            commands.append(command)
+
+    run(Simulator(world, rng, sensors=sensors), driver, start=None, duration_s=4.0, sinks=[_Tap()])
+    return np.array(commands), driver
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.3])
+def test_commands_obey_the_drive_limits_and_replay_from_the_seed(noise: float) -> None:
+    a, driver = _drive(7, noise)
+    b, _ = _drive(7, noise)
+    assert np.array_equal(a, b)
+    drive = driver.robot.drive
+    assert (a[:, 0] >= 0.0).all() and (a[:, 0] <= drive.v_max_mps + 1e-12).all()
+    assert (np.abs(a[:, 1]) <= drive.omega_max_rps + 1e-12).all()
+    assert driver.ticks == len(a)
+    assert driver.last is not None
+    assert all(goal in ("red", "blue", "attract_red", "attract_blue") for goal, _ in driver.reached)

@@ -1,0 +1,113 @@
+"""Decision points: found where the teacher turned off at an opening, never where the fusion agrees;
+splitting tiles each goal segment."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from hypothesis import given
+from hypothesis import strategies as st
+
+from lfdfuse.behaviors.landmarks import OpeningParams
+from lfdfuse.segment.decisions import (
+    DecisionPoint,
+    LandmarkTrack,
+    _runs,
+    find_decisions,
+    split_segments,
+)
+from lfdfuse.segment.goals import GoalSegment
+from lfdfuse.sim.sensors import ScanGeometry
+
+N = 120
+GEOM = ScanGeometry(-math.pi / 2, math.pi / 2, 3, 8.0)
+
+
+def _turn_off(side: int = 0, onset_at: int | None = 38) -> tuple[np.ndarray, np.ndarray, LandmarkTrack]:
+    """Straight on, then from step 40 the teacher turns 90° toward ``side`` over 20 steps while the
+    learned fusion would drive on; an opening on that side begins at ``onset_at``."""
+    sgn = 1.0 if side == 0 else -1.0
+    turn = np.zeros(N)
+    turn[40:60] = sgn * math.radians(90.0) / 20
+    demo_heading = np.where((np.arange(N) >= 40) & (np.arange(N) < 60), sgn * math.radians(60.0), 0.0)
+    demo = np.stack([np.cos(demo_heading), np.sin(demo_heading)], axis=1)
+    fused = np.tile([1.0, 0.0], (N, 1))
+    onsets = np.zeros((N, 2), dtype=bool)
+    if onset_at is not None:
+        onsets[onset_at, side] = True
+    heading = np.cumsum(turn)
+    held = np.where(
+        np.arange(N) >= 40, heading - heading[39], 0.0
+    )  # sectors held at the heading before the turn
+    track = LandmarkTrack(onsets, np.full(N, 0.04), turn, held, np.full((N, 3), 8.0), GEOM, OpeningParams())
+    return demo, fused, track
+
+
+SEGS = (GoalSegment(0, 0, N, "attract_red"),)
+
+
+def test_a_turn_off_at_an_opening_is_one_decision_on_that_side() -> None:
+    for side, name in ((0, "left"), (1, "right")):
+        demo, fused, track = _turn_off(side)
+        (d,) = find_decisions(
+            segments=SEGS, demo=demo, informative=np.ones(N, bool), fused=fused, track=track
+        )
+        assert d.side == name and d.segment == 0 and d.nth == 1 and d.since == 0
+        assert 38 <= d.onset < d.turn_end < N
+        assert 0 <= d.begin <= d.onset
+        assert d.divergence_rad > math.radians(15)
+
+
+def test_no_decision_where_the_fusion_agrees_without_an_opening_or_without_a_goal() -> None:
+    demo, fused, track = _turn_off()
+    ok = np.ones(N, bool)
+    assert find_decisions(segments=SEGS, demo=demo, informative=ok, fused=demo, track=track) == []
+    _, _, blind = _turn_off(onset_at=None)
+    assert find_decisions(segments=SEGS, demo=demo, informative=ok, fused=fused, track=blind) == []
+    tour = (GoalSegment(0, 0, N, None),)
+    assert find_decisions(segments=tour, demo=demo, informative=ok, fused=fused, track=track) == []
+    # steps without heading information cannot diverge
+    assert find_decisions(segments=SEGS, demo=demo, informative=~ok, fused=fused, track=track) == []
+
+
+@given(st.lists(st.booleans(), max_size=60), st.integers(0, 4), st.integers(0, 2**32 - 1))
+def test_runs_cover_the_mask_with_one_sign_each_bridging_short_gaps(
+    mask_list: list[bool], max_gap: int, seed: int
+) -> None:
+    mask = np.array(mask_list, dtype=bool)
+    sign = np.random.default_rng(seed).choice([-1.0, 1.0], size=len(mask))
+    runs = _runs(mask, sign, max_gap)
+    covered = np.zeros(len(mask), bool)
+    last_stop = -1
+    for a, b, s in runs:
+        assert last_stop <= a < b
+        last_stop = b
+        inside = np.nonzero(mask[a:b])[0] + a
+        assert mask[a] and mask[b - 1]
+        assert (sign[inside] == s).all()
+        assert (np.diff(inside) <= max_gap + 1).all()
+        covered[a:b] = True
+    assert (covered | ~mask).all()
+
+
+@given(st.lists(st.integers(1, 30), min_size=1, max_size=4), st.data())
+def test_split_segments_tiles_each_segment_and_keeps_its_goal_last(
+    lengths: list[int], data: st.DataObject
+) -> None:
+    starts = np.concatenate([[0], np.cumsum(lengths)]).tolist()
+    segs = tuple(GoalSegment(i, starts[i], starts[i + 1], f"g{i}") for i in range(len(lengths)))
+    decisions = []
+    for seg in segs:
+        if seg.stop - seg.start >= 3 and data.draw(st.booleans()):
+            d = data.draw(st.integers(seg.start + 1, seg.stop - 2))
+            e = data.draw(st.integers(d + 1, seg.stop - 1))
+            decisions.append(DecisionPoint(seg.index, "left", d, e, 1, seg.start, 0.0, 1.0, 0.5))
+    out = split_segments(segs, decisions)
+    assert [sub.index for _, sub in out] == list(range(len(out)))
+    for seg in segs:
+        subs = [sub for orig, sub in out if orig == seg.index]
+        assert subs[0].start == seg.start and subs[-1].stop == seg.stop
+        assert all(a.stop == b.start for a, b in zip(subs, subs[1:], strict=False))
+        assert [s.goal for s in subs] == [None] * (len(subs) - 1) + [seg.goal]
+        assert len(subs) == 1 + 2 * sum(d.segment == seg.index for d in decisions)
