@@ -1,0 +1,101 @@
+"""Openings as the robot senses them: mirror symmetry, hysteresis, and odometry that ignores the frame."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lfdfuse.behaviors.landmarks import (
+    OpeningParams,
+    OpeningTracker,
+    odometry_increments,
+    opening_onsets,
+    sensed_onsets,
+    side_openings,
+)
+from lfdfuse.sim.sensors import ScanGeometry
+
+# a symmetric 181-beam laser: beam i and beam 180 − i are mirror images
+GEOM = ScanGeometry(-math.pi / 2, math.pi / 180, 181, 8.0)
+seeds = st.integers(0, 2**32 - 1)
+
+
+def _corridor_scans(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Scans of a corridor 1 m to each side, with openings (long returns) on random stretches."""
+    r = np.full((n, 181), 1.0) / np.maximum(np.abs(np.sin(GEOM.angles)), 0.2)[None, :]
+    for side in (slice(120, 175), slice(6, 61)):
+        start = int(rng.integers(0, n))
+        r[start : start + int(rng.integers(3, 15)), side] = 7.5
+    return r
+
+
+@settings(max_examples=12, deadline=None)
+@given(seeds)
+def test_a_mirrored_drive_sees_the_mirrored_openings(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = 60
+    scans = _corridor_scans(rng, n)
+    step = np.full(n, 0.04)
+    turn = rng.normal(0.0, 0.03, n)
+    onsets, held = sensed_onsets(scans, GEOM, step, turn)
+    m_onsets, m_held = sensed_onsets(scans[:, ::-1], GEOM, step, -turn)
+    assert np.array_equal(onsets, m_onsets[:, ::-1])
+    np.testing.assert_allclose(held, -m_held, atol=1e-12)
+
+
+@given(st.lists(st.tuples(st.booleans(), st.booleans()), max_size=60))
+def test_onsets_need_on_ticks_in_a_row_and_never_repeat_without_closing(
+    flags: list[tuple[bool, bool]],
+) -> None:
+    p = OpeningParams()
+    f = np.array(flags, dtype=bool).reshape(-1, 2)
+    onsets = opening_onsets(f, np.zeros(len(f)), p)
+    assert onsets.shape == f.shape
+    for s in (0, 1):
+        hits = np.nonzero(onsets[:, s])[0]
+        for h in hits:
+            assert h + 1 >= p.on_ticks and f[h + 1 - p.on_ticks : h + 1, s].all()
+        for a, b in zip(hits, hits[1:], strict=False):
+            assert (~f[a + 1 : b, s]).sum() >= p.off_ticks  # left behind in between
+
+
+@given(st.lists(st.tuples(st.booleans(), st.booleans()), min_size=1, max_size=40))
+def test_while_turning_no_side_opens(flags: list[tuple[bool, bool]]) -> None:
+    tr = OpeningTracker()
+    for f in flags:
+        assert tr.update(np.array(f), turn_rad=math.radians(30.0)) == (False, False)
+
+
+def test_a_scanner_that_misses_a_side_never_sees_an_opening_there() -> None:
+    front = ScanGeometry(-math.radians(30), math.radians(1), 61, 8.0)
+    assert not side_openings(np.full((3, 61), np.inf), front, OpeningParams()).any()
+    # no return (inf, nan, 0, max range) reaches far
+    for far in (np.inf, np.nan, 0.0, 8.0):
+        assert side_openings(np.full((1, 181), far), GEOM, OpeningParams()).all()
+    assert not side_openings(np.full((1, 181), 1.0), GEOM, OpeningParams()).any()
+
+
+@settings(deadline=None)
+@given(seeds, st.floats(-math.pi, math.pi), st.floats(-50, 50), st.floats(-50, 50))
+def test_odometry_increments_ignore_where_the_path_is_and_add_up(
+    seed: int, rot: float, dx: float, dy: float
+) -> None:
+    rng = np.random.default_rng(seed)
+    steps = rng.uniform(0.0, 0.1, 30)
+    turns = rng.uniform(-0.5, 0.5, 30)
+    heading = np.cumsum(turns)
+    pose = np.stack([np.cumsum(steps * np.cos(heading)), np.cumsum(steps * np.sin(heading)), heading], axis=1)
+    c, s = math.cos(rot), math.sin(rot)
+    moved = np.stack(
+        [c * pose[:, 0] - s * pose[:, 1] + dx, s * pose[:, 0] + c * pose[:, 1] + dy, pose[:, 2] + rot], axis=1
+    )
+    d0, t0 = odometry_increments(pose)
+    d1, t1 = odometry_increments(moved)
+    np.testing.assert_allclose(d0, d1, atol=1e-9)
+    np.testing.assert_allclose(t0, t1, atol=1e-9)
+    assert d0[0] == 0.0 and t0[0] == 0.0
+    np.testing.assert_allclose(t0[1:], turns[1:], atol=1e-12)  # turns within ±π are kept as they were
+    np.testing.assert_allclose(d0[1:], steps[1:], atol=1e-9)  # straight chords of straight steps
