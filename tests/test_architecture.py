@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 LIB = Path(__file__).resolve().parents[1] / "lfdfuse"
@@ -121,6 +122,7 @@ def _imports_of(module: str, path: Path, modules: dict[str, Path]) -> set[str]:
     return found
 
 
+@functools.cache  # parsed once for both tests
 def _import_graph() -> dict[str, set[str]]:
     modules = _modules()
     return {m: _imports_of(m, p, modules) for m, p in modules.items()}

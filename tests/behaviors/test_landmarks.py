@@ -46,6 +46,7 @@ def test_a_mirrored_drive_sees_the_mirrored_openings(seed: int) -> None:
     np.testing.assert_allclose(held, -m_held, atol=1e-12)
 
 
+@settings(max_examples=40)
 @given(st.lists(st.tuples(st.booleans(), st.booleans()), max_size=60))
 def test_onsets_need_on_ticks_in_a_row_and_never_repeat_without_closing(
     flags: list[tuple[bool, bool]],
@@ -62,6 +63,7 @@ def test_onsets_need_on_ticks_in_a_row_and_never_repeat_without_closing(
             assert (~f[a + 1 : b, s]).sum() >= p.off_ticks  # left behind in between
 
 
+@settings(max_examples=40)
 @given(st.lists(st.tuples(st.booleans(), st.booleans()), min_size=1, max_size=40))
 def test_while_turning_no_side_opens(flags: list[tuple[bool, bool]]) -> None:
     tr = OpeningTracker()

@@ -6,7 +6,7 @@ import json
 from pathlib import Path
 
 import numpy as np
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lfdfuse.execute.report import build_report, corridor_style, verdict, write_report
@@ -47,6 +47,7 @@ def test_every_reach_counts_for_at_most_one_goal_in_order(
     assert rep["completed"] is (False if goals else None)
 
 
+@settings(max_examples=40)
 @given(ranges)
 def test_style_mirrors_and_ignores_ticks_without_both_walls(pairs: list[tuple[float, float]]) -> None:
     a = np.array(pairs)
@@ -65,6 +66,7 @@ def test_a_robot_near_its_left_wall_keeps_left() -> None:
     assert corridor_style(np.full(5, 1.0), np.full(5, 1.2)) == "centre"
 
 
+@settings(max_examples=40)
 @given(
     st.dictionaries(st.sampled_from(["a", "b", "c"]), ranges, max_size=3),
     st.integers(0, 50),

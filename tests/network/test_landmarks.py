@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lfdfuse.errors import ConfigError
@@ -45,18 +45,21 @@ def test_to_dict_and_from_dict_round_trip(lm: Landmark) -> None:
     assert lm.describe()  # a line a person reads, never empty
 
 
+@settings(max_examples=40)
 @given(landmarks, progresses)
 def test_left_and_right_mirror(lm: Landmark, p: Progress) -> None:
     mirrored = Progress(p.openings[::-1], p.travelled_m, -p.turned_rad, p.onset[::-1])
     assert lm.met(p) == _mirror(lm).met(mirrored)
 
 
+@settings(max_examples=40)
 @given(openings, progresses, st.integers(1, 5))
 def test_an_opening_met_as_the_nth_is_met_as_any_earlier_one(lm: Landmark, p: Progress, k: int) -> None:
     earlier = Landmark("opening", lm.side, max(1, lm.nth - k), lm.odometry_m)
     assert not lm.met(p) or earlier.met(p)
 
 
+@settings(max_examples=40)
 @given(st.lists(st.tuples(st.booleans(), st.booleans(), st.floats(0, 1), st.floats(-1, 1)), max_size=30))
 def test_progress_adds_up_the_cues(cues: list[tuple[bool, bool, float, float]]) -> None:
     p = Progress.fresh(0.25)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lfdfuse.behaviors.landmarks import OpeningParams
@@ -71,6 +71,7 @@ def test_no_decision_where_the_fusion_agrees_without_an_opening_or_without_a_goa
     assert find_decisions(segments=SEGS, demo=demo, informative=~ok, fused=fused, track=track) == []
 
 
+@settings(max_examples=40)
 @given(st.lists(st.booleans(), max_size=60), st.integers(0, 4), st.integers(0, 2**32 - 1))
 def test_runs_cover_the_mask_with_one_sign_each_bridging_short_gaps(
     mask_list: list[bool], max_gap: int, seed: int
@@ -91,6 +92,7 @@ def test_runs_cover_the_mask_with_one_sign_each_bridging_short_gaps(
     assert (covered | ~mask).all()
 
 
+@settings(max_examples=40)
 @given(st.lists(st.integers(1, 30), min_size=1, max_size=4), st.data())
 def test_split_segments_tiles_each_segment_and_keeps_its_goal_last(
     lengths: list[int], data: st.DataObject

@@ -104,6 +104,7 @@ def _breezy(path: Path, ticks: list[tuple[int, int]]) -> None:
     path.write_text("\n".join(rows) + "\n")
 
 
+@settings(max_examples=40)
 @given(st.lists(st.integers(-300, 300), min_size=1, max_size=15))
 def test_breezyslam_equal_ticks_drive_straight_and_opposite_ticks_turn_on_the_spot(steps: list[int]) -> None:
     with tempfile.TemporaryDirectory() as d:

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import orjson
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lfdfuse.sim.sensors import SensorParams
@@ -41,6 +41,7 @@ messages = st.lists(
 )
 
 
+@settings(max_examples=40)
 @given(messages)
 def test_only_advertised_cmd_vel_channels_are_queued_in_order(sent: list[tuple[int, int, bytes]]) -> None:
     lis = _Listener()
