@@ -10,7 +10,6 @@ fine; parsing a message's payload is the job of its decoder in ``lfdfuse/log/``.
 from __future__ import annotations
 
 import ast
-from pathlib import Path
 
 from tests.conftest import ROOT
 
