@@ -98,7 +98,10 @@ def _number(v: object, what: str) -> float:
             raise MessageError(f"{what} is not finite")
         return v
     if type(v) is int:
-        return float(v)  # orjson integers fit in 64 bits: always a finite double
+        try:
+            return float(v)  # always finite from orjson (its integers fit in 64 bits)
+        except OverflowError:  # e.g. 10**400 from another parser
+            raise MessageError(f"{what} is too large for a float") from None
     raise MessageError(f"{what} is not a number")
 
 
@@ -250,7 +253,10 @@ class BehaviorRow(_Codec):
             for b in rows:
                 _check_behavior(b)
             raise MessageError("a behaviour breaks the schema")  # not reached: the checks name it
-        vectors = np.array((xs, ys), dtype=np.float64).reshape(2, len(rows)).T
+        try:
+            vectors = np.array((xs, ys), dtype=np.float64).reshape(2, len(rows)).T
+        except OverflowError:  # an integer beyond a double, from a parser other than orjson
+            raise MessageError("a behaviour vector is too large for a float") from None
         return cls(t_ns, names, vectors, np.array(app, dtype=bool), np.array(goal, dtype=bool))
 
 

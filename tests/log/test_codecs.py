@@ -212,12 +212,16 @@ def test_decoders_refuse_bytes_that_are_not_a_json_object() -> None:
                 cls.decode(data)
 
 
-def test_from_dict_refuses_non_finite_numbers_that_json_cannot_carry() -> None:
+def test_from_dict_refuses_numbers_that_are_not_finite_doubles() -> None:
     good = orjson.loads(SAMPLES[0].encode())
     with pytest.raises(lfd.MessageError, match="not finite"):
         lfd.BehaviorRow.from_dict(_set(good, ("behaviors", 1, "y"), math.inf))
     with pytest.raises(lfd.MessageError, match="not finite"):
         lfd.DemoHeading.from_dict(_set(orjson.loads(SAMPLES[1].encode()), ("x",), math.nan))
+    with pytest.raises(lfd.MessageError, match="too large"):
+        lfd.BehaviorRow.from_dict(_set(good, ("behaviors", 0, "x"), 10**400))
+    with pytest.raises(lfd.MessageError, match="too large"):
+        lfd.DemoHeading.from_dict({**orjson.loads(SAMPLES[1].encode()), "y": 10**400})
 
 
 def test_a_decoder_error_names_the_field() -> None:
