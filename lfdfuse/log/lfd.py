@@ -1,20 +1,29 @@
 """The ``/lfd/*`` channels (DESIGN §5): what segment and execute add to a log, encode and decode.
 
-Encoders return the JSON bytes written to the MCAP (``orjson``, vectors rounded to 1e-6);
-decoders take the parsed JSON dict. Segment and execute both write ``/lfd/behaviors`` and
-``/lfd/bac`` through the same encoders.
+Each channel is a frozen dataclass with its ``TOPIC`` and ``SCHEMA`` beside ``to_dict`` /
+``encode`` (the JSON bytes written to the MCAP, ``orjson``; behaviour vectors rounded to 1e-6
+by the caller) and ``from_dict`` / ``decode``. The decoders are the only readers of these
+channels: they check what the schema in ``schemas/`` states (required fields, no others, the
+JSON types, integers that are not booleans, non-negative stamps, bitmasks and indices, finite
+numbers) once, here, and raise :class:`MessageError` otherwise; a reader names the file, the
+channel and the time. What a schema cannot state (a known behaviour name, a BAC that agrees with
+the applicability bits) is for the reader to check.
+
+Segment and execute both write ``/lfd/behaviors`` and ``/lfd/bac`` through the same encoders.
 """
 
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar, Self
 
 import numpy as np
 import orjson
 
+from lfdfuse.errors import LogError
 from lfdfuse.log.stamps import stamp
 
 #: channels that ``segment`` adds (a contract)
@@ -35,121 +44,459 @@ EXECUTE_TOPICS: dict[str, str] = {
 }
 
 
+class MessageError(LogError):
+    """A ``/lfd/*`` message that breaks its schema; the message says what, the reader says where."""
+
+
+# --- checks shared by the decoders ----------------------------------------------------------
+# orjson only ever yields dict, list, str, int, float, bool and None, and refuses NaN and
+# numbers that overflow a double, so exact ``type`` tests are both sufficient and fast.
+
+
+def _object(data: bytes) -> dict[str, Any]:
+    try:
+        msg = orjson.loads(data)
+    except orjson.JSONDecodeError as exc:
+        raise MessageError(f"not valid JSON ({str(exc)[:60]})") from None
+    if type(msg) is not dict:
+        raise MessageError("not a JSON object")
+    return msg
+
+
+def _fields(msg: dict[str, Any], keys: frozenset[str]) -> None:
+    """The schema's required fields and no others (``additionalProperties: false``).
+
+    Only the count is compared here (cheap, once per message); a decoder that then misses a
+    field calls :func:`_keys_error` on the ``KeyError``.
+    """
+    if len(msg) != len(keys):
+        raise _keys_error(msg, keys)
+
+
+def _keys_error(msg: dict[str, Any], keys: frozenset[str]) -> MessageError:
+    missing = sorted(keys - msg.keys())
+    extra = sorted(map(str, msg.keys() - keys))
+    if missing:
+        return MessageError(f"a field is missing: {missing[0]!r}")
+    if extra:
+        return MessageError(f"an unknown field: {extra[0]!r:.40}")
+    return MessageError("a field is missing")
+
+
+def _t_ns(msg: dict[str, Any]) -> int:
+    ts = msg["timestamp"]
+    sec = ts.get("sec") if type(ts) is dict else None
+    nsec = ts.get("nsec") if type(ts) is dict else None
+    if type(sec) is int and type(nsec) is int and sec >= 0 and 0 <= nsec < 1_000_000_000:
+        return sec * 1_000_000_000 + nsec
+    raise MessageError("timestamp needs integer sec >= 0 and nsec in [0, 1e9)")
+
+
+def _number(v: object, what: str) -> float:
+    if type(v) is float:
+        if not math.isfinite(v):  # only from a dict not parsed by orjson
+            raise MessageError(f"{what} is not finite")
+        return v
+    if type(v) is int:
+        try:
+            return float(v)  # always finite from orjson (its integers fit in 64 bits)
+        except OverflowError:  # e.g. 10**400 from another parser
+            raise MessageError(f"{what} is too large for a float") from None
+    raise MessageError(f"{what} is not a number")
+
+
+def _flag(v: object, what: str) -> bool:
+    if type(v) is not bool:
+        raise MessageError(f"{what} is not true or false")
+    return v
+
+
+def _count(v: object, what: str) -> int:
+    if type(v) is not int or v < 0:
+        raise MessageError(f"{what} is not a non-negative integer")
+    return v
+
+
+def _name(v: object, what: str) -> str:
+    if type(v) is not str:
+        raise MessageError(f"{what} is not a string")
+    return v
+
+
+def _name_or_none(v: object, what: str) -> str | None:
+    return None if v is None else _name(v, f"{what} (string or null)")
+
+
+def _names(v: object, what: str) -> tuple[str, ...]:
+    if type(v) is not list:
+        raise MessageError(f"{what} is not a list")
+    if not set(map(type, v)) <= {str}:
+        raise MessageError(f"an entry of {what} is not a string")
+    return tuple(v)
+
+
+class _Codec:
+    """What every ``/lfd/*`` message class shares: JSON bytes in and out, and the field check."""
+
+    TOPIC: ClassVar[str]
+    SCHEMA: ClassVar[str]
+    KEYS: ClassVar[frozenset[str]]
+
+    def to_dict(self) -> dict[str, Any]:
+        raise NotImplementedError
+
+    def encode(self) -> bytes:
+        """The message's JSON bytes, as written to the MCAP."""
+        return orjson.dumps(self.to_dict())
+
+    @classmethod
+    def _from_json(cls, msg: dict[str, Any]) -> Self:
+        raise NotImplementedError
+
+    @classmethod
+    def from_dict(cls, msg: dict[str, Any]) -> Self:
+        """The message of a parsed JSON object; :class:`MessageError` if it breaks the schema."""
+        if type(msg) is not dict:
+            raise MessageError("not a JSON object")
+        try:
+            return cls._from_json(msg)
+        except KeyError:
+            raise _keys_error(msg, cls.KEYS) from None
+
+    @classmethod
+    def decode(cls, data: bytes) -> Self:
+        """The message of its JSON bytes; :class:`MessageError` if they break the schema."""
+        msg = _object(data)
+        try:
+            return cls._from_json(msg)
+        except KeyError:
+            raise _keys_error(msg, cls.KEYS) from None
+
+
 # --- /lfd/behaviors -------------------------------------------------------------------------
 
+_BEHAVIOR_KEYS = frozenset({"name", "x", "y", "applicable", "goal_met"})
+_ROW_FIELDS = operator.itemgetter("name", "x", "y", "applicable", "goal_met")
+_NO_ROWS: tuple[tuple[Any, ...], ...] = ((), (), (), (), ())
+_STR, _REAL, _BOOL = frozenset({str}), frozenset({int, float}), frozenset({bool})
 
-@dataclass(frozen=True)
-class BehaviorRow:
-    """The behaviour outputs of one tick: ``vectors (K, 2)``, ``applicable (K,)``, ``goal_met (K,)``."""
 
+def _check_behavior(b: object) -> None:
+    """The precise error for a behaviour entry the fast path refused."""
+    if type(b) is not dict:
+        raise MessageError("a behaviour is not an object")
+    if b.keys() != _BEHAVIOR_KEYS:
+        raise _keys_error(b, _BEHAVIOR_KEYS)
+    name = _name(b["name"], "a behaviour name")
+    _number(b["x"], f"x of {name!r:.40}")
+    _number(b["y"], f"y of {name!r:.40}")
+    _flag(b["applicable"], f"applicable of {name!r:.40}")
+    _flag(b["goal_met"], f"goal_met of {name!r:.40}")
+
+
+@dataclass(frozen=True, eq=False)  # arrays: compare the fields
+class BehaviorRow(_Codec):
+    """``lfdfuse.BehaviorOutputs``: the behaviour outputs of one tick.
+
+    ``vectors (K, 2)`` robot-frame (x, y), ``applicable (K,)`` and ``goal_met (K,)`` booleans.
+    """
+
+    TOPIC: ClassVar[str] = "/lfd/behaviors"
+    SCHEMA: ClassVar[str] = "lfdfuse.BehaviorOutputs"
+    KEYS: ClassVar[frozenset[str]] = frozenset({"timestamp", "behaviors"})
+
+    t_ns: int
     names: tuple[str, ...]
     vectors: np.ndarray
     applicable: np.ndarray
     goal_met: np.ndarray
+
+    def to_dict(self) -> dict[str, Any]:
+        vec = self.vectors.tolist()
+        app = self.applicable.tolist()
+        goal = self.goal_met.tolist()
+        return {
+            "timestamp": stamp(self.t_ns),
+            "behaviors": [
+                {"name": n, "x": vec[j][0], "y": vec[j][1], "applicable": app[j], "goal_met": goal[j]}
+                for j, n in enumerate(self.names)
+            ],
+        }
+
+    @classmethod
+    def from_dict(cls, msg: dict[str, Any]) -> BehaviorRow:
+        row = super().from_dict(msg)
+        if not np.isfinite(row.vectors).all():  # orjson refuses NaN and overflow: only other dicts
+            raise MessageError("a behaviour vector is not finite")
+        return row
+
+    @classmethod
+    def _from_json(cls, msg: dict[str, Any]) -> BehaviorRow:
+        _fields(msg, cls.KEYS)
+        t_ns = _t_ns(msg)
+        rows = msg["behaviors"]
+        if type(rows) is not list:
+            raise MessageError("behaviors is not a list")
+        # the hot loop of reading a log, kept in C: the five fields of every behaviour as
+        # columns, each column's set of types against the allowed; the details only on failure
+        try:
+            names, xs, ys, app, goal = zip(*map(_ROW_FIELDS, rows), strict=True) if rows else _NO_ROWS
+        except (TypeError, KeyError):
+            names = ()
+        if not (
+            len(names) == len(rows)
+            and set(map(type, names)) <= _STR
+            and set(map(type, xs)) | set(map(type, ys)) <= _REAL
+            and set(map(type, app)) | set(map(type, goal)) <= _BOOL
+            and sum(map(len, rows)) == len(_BEHAVIOR_KEYS) * len(rows)
+        ):
+            for b in rows:
+                _check_behavior(b)
+            raise MessageError("a behaviour breaks the schema")  # not reached: the checks name it
+        try:
+            vectors = np.array((xs, ys), dtype=np.float64).reshape(2, len(rows)).T
+        except OverflowError:  # an integer beyond a double, from a parser other than orjson
+            raise MessageError("a behaviour vector is too large for a float") from None
+        return cls(t_ns, names, vectors, np.array(app, dtype=bool), np.array(goal, dtype=bool))
 
 
 def encode_behaviors(
     t_ns: int, names: Sequence[str], vectors: np.ndarray, applicable: np.ndarray, goal_met: np.ndarray
 ) -> bytes:
     """``vectors (K, 2)`` already rounded by the caller (one ``np.round`` over a whole log is faster)."""
-    vec = vectors.tolist()
-    app = applicable.tolist()
-    goal = goal_met.tolist()
-    return orjson.dumps(
-        {
-            "timestamp": stamp(t_ns),
-            "behaviors": [
-                {"name": n, "x": vec[j][0], "y": vec[j][1], "applicable": app[j], "goal_met": goal[j]}
-                for j, n in enumerate(names)
-            ],
-        }
-    )
+    return BehaviorRow(t_ns, tuple(names), vectors, applicable, goal_met).encode()
 
 
-def decode_behaviors(msg: dict[str, Any]) -> BehaviorRow:
-    rows = msg["behaviors"]
-    return BehaviorRow(
-        tuple(str(b["name"]) for b in rows),
-        np.array([(b["x"], b["y"]) for b in rows], dtype=np.float64).reshape(len(rows), 2),
-        np.array([b["applicable"] for b in rows], dtype=bool),
-        np.array([b["goal_met"] for b in rows], dtype=bool),
-    )
+def decode_behaviors(data: bytes) -> BehaviorRow:
+    return BehaviorRow.decode(data)
 
 
 # --- /lfd/demo ------------------------------------------------------------------------------
 
 
+@dataclass(frozen=True)
+class DemoHeading(_Codec):
+    """``lfdfuse.DemoHeading``: the demonstrated unit vector V_r (robot frame);
+    ``informative`` False when the command carries no heading."""
+
+    TOPIC: ClassVar[str] = "/lfd/demo"
+    SCHEMA: ClassVar[str] = "lfdfuse.DemoHeading"
+    KEYS: ClassVar[frozenset[str]] = frozenset({"timestamp", "x", "y", "heading_rad", "informative"})
+
+    t_ns: int
+    x: float
+    y: float
+    informative: bool
+
+    @property
+    def heading_rad(self) -> float:
+        return math.atan2(self.y, self.x)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "timestamp": stamp(self.t_ns),
+            "x": self.x,
+            "y": self.y,
+            "heading_rad": self.heading_rad,
+            "informative": self.informative,
+        }
+
+    @classmethod
+    def _from_json(cls, msg: dict[str, Any]) -> DemoHeading:
+        _fields(msg, cls.KEYS)
+        _number(msg["heading_rad"], "heading_rad")  # derived from x, y: checked, not kept
+        return cls(
+            _t_ns(msg),
+            _number(msg["x"], "x"),
+            _number(msg["y"], "y"),
+            _flag(msg["informative"], "informative"),
+        )
+
+
 def encode_demo(t_ns: int, x: float, y: float, informative: bool) -> bytes:
     """The demonstrated unit vector V_r; ``informative`` False when the command carries no heading."""
-    return orjson.dumps(
-        {
-            "timestamp": stamp(t_ns),
-            "x": x,
-            "y": y,
-            "heading_rad": math.atan2(y, x),
-            "informative": informative,
-        }
-    )
+    return DemoHeading(t_ns, x, y, informative).encode()
 
 
-def decode_demo(msg: dict[str, Any]) -> tuple[float, float, bool]:
-    """``(x, y, informative)``."""
-    return float(msg["x"]), float(msg["y"]), bool(msg["informative"])
+def decode_demo(data: bytes) -> DemoHeading:
+    return DemoHeading.decode(data)
 
 
 # --- /lfd/bac -------------------------------------------------------------------------------
 
 
+@dataclass(frozen=True)
+class Bac(_Codec):
+    """``lfdfuse.Bac``: the applicability bit mask (bit i: behaviour i applicable) and the names."""
+
+    TOPIC: ClassVar[str] = "/lfd/bac"
+    SCHEMA: ClassVar[str] = "lfdfuse.Bac"
+    KEYS: ClassVar[frozenset[str]] = frozenset({"timestamp", "bac", "applicable"})
+
+    t_ns: int
+    bac: int
+    applicable: tuple[str, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"timestamp": stamp(self.t_ns), "bac": self.bac, "applicable": list(self.applicable)}
+
+    @classmethod
+    def _from_json(cls, msg: dict[str, Any]) -> Bac:
+        _fields(msg, cls.KEYS)
+        return cls(_t_ns(msg), _count(msg["bac"], "bac"), _names(msg["applicable"], "applicable"))
+
+
 def encode_bac(t_ns: int, bac: int, applicable: Sequence[str]) -> bytes:
-    return orjson.dumps({"timestamp": stamp(t_ns), "bac": bac, "applicable": list(applicable)})
+    return Bac(t_ns, bac, tuple(applicable)).encode()
 
 
-def decode_bac(msg: dict[str, Any]) -> int:
-    return int(msg["bac"])
+def decode_bac(data: bytes) -> Bac:
+    return Bac.decode(data)
 
 
 # --- /lfd/segment ---------------------------------------------------------------------------
 
 
+@dataclass(frozen=True)
+class SegmentMark(_Codec):
+    """``lfdfuse.GoalSegment``: the goal segment a tick belongs to, the behaviour whose goal ends
+    it and that goal's target (both None for a trailing part that reaches no goal)."""
+
+    TOPIC: ClassVar[str] = "/lfd/segment"
+    SCHEMA: ClassVar[str] = "lfdfuse.GoalSegment"
+    KEYS: ClassVar[frozenset[str]] = frozenset({"timestamp", "index", "goal", "target"})
+
+    t_ns: int
+    index: int
+    goal: str | None
+    target: str | None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"timestamp": stamp(self.t_ns), "index": self.index, "goal": self.goal, "target": self.target}
+
+    @classmethod
+    def _from_json(cls, msg: dict[str, Any]) -> SegmentMark:
+        _fields(msg, cls.KEYS)
+        return cls(
+            _t_ns(msg),
+            _count(msg["index"], "index"),
+            _name_or_none(msg["goal"], "goal"),
+            _name_or_none(msg["target"], "target"),
+        )
+
+
 def encode_segment(t_ns: int, index: int, goal: str | None, target: str | None) -> bytes:
-    return orjson.dumps({"timestamp": stamp(t_ns), "index": index, "goal": goal, "target": target})
+    return SegmentMark(t_ns, index, goal, target).encode()
 
 
-def decode_segment(msg: dict[str, Any]) -> tuple[int, str | None]:
-    """``(segment index, goal behaviour or None)``."""
-    goal = msg["goal"]
-    return int(msg["index"]), None if goal is None else str(goal)
+def decode_segment(data: bytes) -> SegmentMark:
+    return SegmentMark.decode(data)
 
 
 # --- /lfd/step and /lfd/fused (execute) -----------------------------------------------------
 
 
+@dataclass(frozen=True)
+class NetworkStep(_Codec):
+    """``lfdfuse.NetworkStep``: the active step of a tick (nested names joined by ``/``; None when
+    the task is complete), its goal, the BAC, whether default weights were used (a BAC never
+    seen in training), and the goals achieved so far, in order."""
+
+    TOPIC: ClassVar[str] = "/lfd/step"
+    SCHEMA: ClassVar[str] = "lfdfuse.NetworkStep"
+    KEYS: ClassVar[frozenset[str]] = frozenset(
+        {"timestamp", "step", "goal", "bac", "default_weights", "achieved"}
+    )
+
+    t_ns: int
+    step: str | None
+    goal: str | None
+    bac: int
+    default_weights: bool
+    achieved: tuple[str, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "timestamp": stamp(self.t_ns),
+            "step": self.step,
+            "goal": self.goal,
+            "bac": self.bac,
+            "default_weights": self.default_weights,
+            "achieved": list(self.achieved),
+        }
+
+    @classmethod
+    def _from_json(cls, msg: dict[str, Any]) -> NetworkStep:
+        _fields(msg, cls.KEYS)
+        return cls(
+            _t_ns(msg),
+            _name_or_none(msg["step"], "step"),
+            _name_or_none(msg["goal"], "goal"),
+            _count(msg["bac"], "bac"),
+            _flag(msg["default_weights"], "default_weights"),
+            _names(msg["achieved"], "achieved"),
+        )
+
+
 def encode_step(
     t_ns: int, *, step: str | None, goal: str | None, bac: int, default_weights: bool, achieved: Sequence[str]
 ) -> bytes:
-    return orjson.dumps(
-        {
-            "timestamp": stamp(t_ns),
-            "step": step,
-            "goal": goal,
-            "bac": bac,
-            "default_weights": default_weights,
-            "achieved": list(achieved),
-        }
-    )
+    return NetworkStep(t_ns, step, goal, bac, default_weights, tuple(achieved)).encode()
 
 
 def decode_step(msg: dict[str, Any]) -> tuple[str | None, int, bool]:
-    """``(active step or None, bac, default weights used)``."""
-    step = msg["step"]
-    return None if step is None else str(step), int(msg["bac"]), bool(msg["default_weights"])
+    """``(active step or None, bac, default weights used)`` of a parsed message.
+
+    Kept only for ``viz/experiments.py`` until it moves out of ``viz/``; new readers call
+    :meth:`NetworkStep.decode` on the message bytes.
+    """
+    s = NetworkStep.from_dict(msg)
+    return s.step, s.bac, s.default_weights
+
+
+@dataclass(frozen=True)
+class FusedVector(_Codec):
+    """``lfdfuse.FusedVector``: the fused robot-frame vector and the weights that made it
+    (rounded to 1e-4 on the wire, so a decoded message holds the rounded weights)."""
+
+    TOPIC: ClassVar[str] = "/lfd/fused"
+    SCHEMA: ClassVar[str] = "lfdfuse.FusedVector"
+    KEYS: ClassVar[frozenset[str]] = frozenset({"timestamp", "x", "y", "weights"})
+
+    t_ns: int
+    x: float
+    y: float
+    weights: dict[str, float]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "timestamp": stamp(self.t_ns),
+            "x": self.x,
+            "y": self.y,
+            "weights": {k: round(v, 4) for k, v in self.weights.items()},
+        }
+
+    @classmethod
+    def _from_json(cls, msg: dict[str, Any]) -> FusedVector:
+        _fields(msg, cls.KEYS)
+        w = msg["weights"]
+        if type(w) is not dict:
+            raise MessageError("weights is not an object")
+        weights = {k: _number(v, f"the weight of {k!r:.40}") for k, v in w.items()}
+        if any(v < 0 for v in weights.values()):
+            raise MessageError("a weight is negative")
+        return cls(_t_ns(msg), _number(msg["x"], "x"), _number(msg["y"], "y"), weights)
 
 
 def encode_fused(t_ns: int, x: float, y: float, weights: dict[str, float]) -> bytes:
-    return orjson.dumps(
-        {"timestamp": stamp(t_ns), "x": x, "y": y, "weights": {k: round(v, 4) for k, v in weights.items()}}
-    )
+    return FusedVector(t_ns, x, y, weights).encode()
 
 
-def decode_fused(msg: dict[str, Any]) -> tuple[float, float, dict[str, float]]:
-    return float(msg["x"]), float(msg["y"]), {str(k): float(v) for k, v in msg["weights"].items()}
+def decode_fused(data: bytes) -> FusedVector:
+    return FusedVector.decode(data)
+
+
+#: every ``/lfd/*`` message class, by topic
+CODECS: dict[str, type[_Codec]] = {
+    c.TOPIC: c for c in (BehaviorRow, DemoHeading, Bac, SegmentMark, NetworkStep, FusedVector)
+}

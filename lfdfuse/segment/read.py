@@ -2,13 +2,10 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
-import orjson
 
 from lfdfuse.behaviors.primitives import ATTRACT, BASE_BEHAVIORS
 from lfdfuse.errors import LogError
@@ -60,7 +57,7 @@ class _Columns:
         self.goal_met = np.empty((n, k), dtype=bool)
         self.n = 0
 
-    def append(self, t_ns: int, rows: list[Any]) -> None:
+    def append(self, t_ns: int, row: lfd.BehaviorRow) -> None:
         if self.n == len(self.t_ns):
             for name in ("t_ns", "vectors", "applicable", "goal_met"):
                 old = getattr(self, name)
@@ -69,21 +66,29 @@ class _Columns:
                 setattr(self, name, new)
         i = self.n
         self.t_ns[i] = t_ns
-        for j, b in enumerate(rows):
-            x, y, app, goal = b["x"], b["y"], b["applicable"], b["goal_met"]
-            if not (isinstance(app, bool) and isinstance(goal, bool)):
-                raise TypeError("applicable and goal_met must be true or false")
-            self.vectors[i, j] = (float(x), float(y))
-            self.applicable[i, j], self.goal_met[i, j] = app, goal
-        if not np.isfinite(self.vectors[i]).all():
-            raise ValueError("a behaviour vector is not finite")
+        self.vectors[i] = row.vectors
+        self.applicable[i] = row.applicable
+        self.goal_met[i] = row.goal_met
         self.n += 1
+
+
+def _first_names(path: str | Path, names: tuple[str, ...]) -> None:
+    """The behaviour set of the first ``/lfd/behaviors`` message: known names, none repeated."""
+    broken = f"{path}: broken /lfd/behaviors"
+    if not names or len(names) > MAX_BEHAVIORS or len(set(names)) != len(names):
+        raise LogError(f"{broken}: it names {len(names)} behaviours or repeats one; segment the demo again")
+    bad = [n for n in names if not _is_behavior(n)]
+    if bad:
+        raise LogError(f"{broken}: unknown behaviour {bad[0][:40]!r}; segment the demo again")
 
 
 def read_segmented(path: str | Path) -> SegmentedRun:
     """Load the ``/lfd/*`` channels of a segmented log; a clear error if there are none or they are broken.
 
-    One pass; memory is the per-step arrays (``N × K``), nothing per message.
+    One pass; memory is the per-step arrays (``N × K``), nothing per message. The messages are
+    read by the decoders of :mod:`lfdfuse.log.lfd`, which check what their schemas state; this
+    checks what the schemas cannot (known behaviours, one behaviour set, BACs that agree with
+    the applicability bits, contiguous segments).
     """
     info = file_info(path)
     if "/lfd/behaviors" not in info.channels:
@@ -94,55 +99,45 @@ def read_segmented(path: str | Path) -> SegmentedRun:
     informative: list[bool] = []
     bac: list[int] = []
     seg: list[tuple[int, str | None]] = []
-    broken = f"{path}: broken /lfd/* messages"
+    decode_behaviors, decode_demo = lfd.BehaviorRow.decode, lfd.DemoHeading.decode
+    decode_bac, decode_segment = lfd.Bac.decode, lfd.SegmentMark.decode
+    topic, t = "", 0
     try:
         for topic, _s, t, data in iter_messages(path, topics=list(lfd.SEGMENT_TOPICS)):
-            msg: Any = orjson.loads(data)
-            if not isinstance(msg, dict):
-                raise TypeError(f"a {topic} message is not a JSON object")
             if topic == "/lfd/behaviors":
-                rows = msg["behaviors"]
-                if not isinstance(rows, list):
-                    raise TypeError("behaviors is not a list")
-                names = tuple(b["name"] for b in rows)
+                row = decode_behaviors(data)
                 if cols is None:
-                    if not names or len(names) > MAX_BEHAVIORS or len(set(names)) != len(names):
-                        raise LogError(
-                            f"{broken}: /lfd/behaviors names {len(names)} behaviours or repeats one"
-                        )
-                    bad = [n for n in names if not _is_behavior(n)]
-                    if bad:
-                        raise LogError(
-                            f"{broken}: unknown behaviour {str(bad[0])[:40]!r}; segment the demo again"
-                        )
-                    cols = _Columns(names, capacity)
-                elif names != cols.names:
+                    _first_names(path, row.names)
+                    cols = _Columns(row.names, capacity)
+                elif row.names != cols.names:
                     raise LogError(
                         f"{path}: /lfd/behaviors changes its behaviour set; segment the demo again"
                     )
-                cols.append(t, rows)
+                cols.append(t, row)
             elif topic == "/lfd/demo":
-                x, y, ok = float(msg["x"]), float(msg["y"]), msg["informative"]
-                if not isinstance(ok, bool) or not (math.isfinite(x) and math.isfinite(y)):
-                    raise ValueError("/lfd/demo needs a finite x, y and a true/false informative")
-                demo.append((x, y))
-                informative.append(ok)
+                d = decode_demo(data)
+                demo.append((d.x, d.y))
+                informative.append(d.informative)
             elif topic == "/lfd/bac":
-                b = msg["bac"]
-                if not isinstance(b, int) or isinstance(b, bool):
-                    raise TypeError("bac is not an integer")
+                b = decode_bac(data).bac
+                if b >> MAX_BEHAVIORS:
+                    raise lfd.MessageError(
+                        f"bac has bits beyond the {MAX_BEHAVIORS} behaviours a log can hold"
+                    )
                 bac.append(b)
             elif topic == "/lfd/segment":
-                index, goal = lfd.decode_segment(msg)
-                if not isinstance(msg["index"], int) or not 0 <= index < 2**31:
-                    raise ValueError("a segment index is not a small non-negative integer")
-                if goal is not None and not _is_behavior(goal):
-                    raise ValueError("a segment goal is not a behaviour")
-                seg.append((index, goal))
-    except (orjson.JSONDecodeError, KeyError, TypeError, ValueError, IndexError, OverflowError) as exc:
-        raise LogError(
-            f"{broken} ({exc.__class__.__name__}: {str(exc)[:80]}); segment the demo again"
-        ) from exc
+                mark = decode_segment(data)
+                if mark.index >= 2**31:
+                    raise lfd.MessageError("the segment index is not below 2^31")
+                if (
+                    mark.goal is not None
+                    and (not seg or mark.goal != seg[-1][1])
+                    and not _is_behavior(mark.goal)
+                ):
+                    raise lfd.MessageError(f"the segment goal {mark.goal[:40]!r} is not a behaviour")
+                seg.append((mark.index, mark.goal))
+    except lfd.MessageError as exc:
+        raise LogError(f"{path}: a {topic} message at t={t} ns: {exc}; segment the demo again") from exc
     n = 0 if cols is None else cols.n
     if cols is None or n == 0 or not (len(demo) == len(bac) == len(seg) == n):
         raise LogError(f"{path}: the /lfd/* channels are incomplete; segment the demo again")

@@ -14,7 +14,6 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
-import orjson
 import shapely
 
 from lfdfuse.errors import LfdError, LogError
@@ -189,19 +188,19 @@ def _run(
     bacs: list[int] = []
     achieved: list[tuple[int, str]] = []
     seen: set[str] = set()
+    t = 0
     try:
-        for _topic, _schema, t, data in iter_messages(path, topics=["/lfd/step"]):
-            msg = orjson.loads(data)
-            name, bac, _default = lfd.decode_step(msg)
+        for _topic, _schema, t, data in iter_messages(path, topics=[lfd.NetworkStep.TOPIC]):
+            step = lfd.NetworkStep.decode(data)
             step_t.append(t)
-            steps.append(name)
-            bacs.append(bac)
-            for g in msg.get("achieved") or []:
+            steps.append(step.step)
+            bacs.append(step.bac)
+            for g in step.achieved:
                 if g not in seen:
                     seen.add(g)
-                    achieved.append((t, str(g)))
-    except (orjson.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
-        raise LogError(f"{src}: broken /lfd/step messages ({exc.__class__.__name__})") from exc
+                    achieved.append((t, g))
+    except lfd.MessageError as exc:
+        raise LogError(f"{src}: a /lfd/step message at t={t} ns: {exc}") from exc
     if not step_t:
         raise LogError(f"{src}: /lfd/step has no messages")
     names = tuple(dict.fromkeys(s for s in steps if s is not None))

@@ -375,6 +375,9 @@ def seg_broken() -> Iterator[Case]:
         "payload-garbage": _seg(_on(B, lambda i, d: b"\xff" if i == 3 else d)),
         "payload-array": _seg(_on(D, lambda i, d: [1, 2])),
         "payload-deep": _seg(_on(C, lambda i, d: b"[" * 3000 + b"]" * 3000 if i == 2 else d)),
+        "x-numeric-string": _seg(_on(B, lambda i, d: _set(d, ("behaviors", 0, "x"), "0.5"))),
+        "goal-met-int": _seg(_on(B, lambda i, d: _set(d, ("behaviors", 0, "goal_met"), 0))),
+        "extra-field": _seg(_on(D, lambda i, d: {**d, "speed": 1.0})),
     }
     for name, content in variants.items():
         yield Case(
