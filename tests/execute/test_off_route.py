@@ -17,11 +17,11 @@ import yaml
 
 from lfdfuse.behaviors.landmarks import OpeningParams, OpeningSensor, opening_onsets, side_openings
 from lfdfuse.errors import ConfigError
+from lfdfuse.evaluate.offroute import CASES, demonstrate, learn_case, perturbed_starts, run_starts
 from lfdfuse.network.landmarks import Cues, Landmark, Progress
 from lfdfuse.network.runtime import NetworkRuntime
 from lfdfuse.network.table import dump_table, parse_table
 from lfdfuse.sim.sensors import LaserParams
-from lfdfuse.tools.bench_offroute import CASES, demonstrate, learn, perturbed_starts, run_starts
 from lfdfuse.world.model import load_world
 from tests.conftest import ROOT
 
@@ -160,7 +160,7 @@ def office(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, object]:
 def test_a_turn_into_an_office_off_the_route_is_reproduced(office: tuple[Path, Path]) -> None:
     tmp, seg = office
     case = CASES["office-room"]
-    table = learn(seg, subgoals=True)
+    table = learn_case(seg, subgoals=True)
     inner = table.network.steps[1].network
     assert inner is not None, "the turn into the office is a decision point"
     assert inner.steps[0].landmark is not None and inner.steps[0].landmark.side == "right"
@@ -172,7 +172,7 @@ def test_a_turn_into_an_office_off_the_route_is_reproduced(office: tuple[Path, P
 def test_a_turn_into_a_dead_end_spur_off_the_route_is_reproduced(tmp_path: Path) -> None:
     case = CASES["ring-spur"]
     seg = demonstrate(case, folder=tmp_path)
-    table = learn(seg, subgoals=True)
+    table = learn_case(seg, subgoals=True)
     inner = table.network.steps[1].network
     assert inner is not None, "the turn into the spur is a decision point"
     assert inner.steps[0].landmark is not None and inner.steps[0].landmark.side == "left"
