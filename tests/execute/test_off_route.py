@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from typing import Any
 
 import jsonschema
 import numpy as np
@@ -195,3 +196,46 @@ def test_estimate_subgoals_from_the_command_line(office: tuple[Path, Path], tmp_
     assert any(s.network is not None and any(x.landmark is not None for x in s.network.steps) for s in steps)
     shown = CliRunner().invoke(app, ["inspect", str(out)])
     assert shown.exit_code == 0 and "opening on the" in shown.output
+
+
+def test_subgoals_read_the_log_once_and_refine_the_table_they_are_given(
+    office: tuple[Path, Path], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """One read of each kind, one estimate of the whole demo, then only the new sub-segment rows."""
+    import lfdfuse.estimate.pipeline as pipeline
+    from lfdfuse import learn
+    from lfdfuse.estimate.methods import estimate_groups
+    from lfdfuse.log.reader import read_run
+    from lfdfuse.segment.read import read_segmented
+
+    _tmp, seg = office
+    calls: dict[str, list[int]] = {"read_segmented": [], "read_run": [], "estimate_run": [], "problems": []}
+
+    def counted(name: str, fn: Any) -> Any:
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            calls[name].append(1)
+            return fn(*args, **kwargs)
+
+        return wrapper
+
+    def groups(problems: Any, **kwargs: Any) -> Any:
+        calls["problems"].append(len(problems))
+        return estimate_groups(problems, **kwargs)
+
+    monkeypatch.setattr(learn, "read_segmented", counted("read_segmented", read_segmented))
+    monkeypatch.setattr(learn, "read_run", counted("read_run", read_run))
+    monkeypatch.setattr(learn, "estimate_run", counted("estimate_run", pipeline.estimate_run))
+    monkeypatch.setattr(pipeline, "estimate_groups", groups)
+    refined = learn.learn([seg], options=learn.LearnOptions(subgoals=True))
+    assert len(calls["read_segmented"]) == len(calls["read_run"]) == len(calls["estimate_run"]) == 1
+    assert refined.decisions, "the office demo has a decision point"
+    base, sub = calls["problems"]  # the whole demo, then the refinement
+    assert 0 < sub < base, calls
+    plain = learn.learn_run(read_segmented(seg), name=seg.name).table
+    decided = {d.segment for d in refined.decisions}
+    for i, (a, b) in enumerate(zip(plain.network.steps, refined.table.network.steps, strict=True)):
+        if i in decided:
+            assert b.network is not None and b.name == a.name and b.goal == a.goal
+        else:
+            assert a == b, f"step {i} has no decision: refine keeps it as given"
+    assert refined.table.default_weights == plain.default_weights
