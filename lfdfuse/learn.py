@@ -116,13 +116,15 @@ def demonstrate(
     behaviors: str | None = None,
     measure_lag: bool = True,
 ) -> Demonstration:
-    """Demonstrate in ``world`` and segment: ``folder/name.mcap`` and ``folder/name.seg.mcap``.
+    """Demonstrate in ``world`` and segment: ``folder/name.mcap`` and ``folder/name.seg.mcap``
+    (``folder`` is created).
 
     ``teacher`` is a task's legs (the scripted style teacher, ``simulate --teacher``, named
     ``teacher_name`` in the log) or a fusion table (the network teacher, ``simulate --teacher
     TABLE``, with ``heading_noise_rad``). ``behaviors`` (default: the segment preset, or the
     table's behaviours) and ``measure_lag`` are ``segment``'s.
     """
+    folder.mkdir(parents=True, exist_ok=True)
     raw, seg = folder / f"{name}.mcap", folder / f"{name}.seg.mcap"
     pose = None if start is None else Pose(*start)
     t0 = time.perf_counter()
