@@ -204,7 +204,8 @@ def test_subgoals_read_the_log_once_and_refine_the_table_they_are_given(
     """One read of each kind, one estimate of the whole demo, then only the new sub-segment rows."""
     import lfdfuse.estimate.pipeline as pipeline
     from lfdfuse import learn
-    from lfdfuse.estimate.methods import estimate_groups
+    from lfdfuse.estimate.methods import EstimateOptions, estimate_groups
+    from lfdfuse.estimate.smc import SMCParams
     from lfdfuse.log.reader import read_run
     from lfdfuse.segment.read import read_segmented
 
@@ -226,12 +227,13 @@ def test_subgoals_read_the_log_once_and_refine_the_table_they_are_given(
     monkeypatch.setattr(learn, "read_run", counted("read_run", read_run))
     monkeypatch.setattr(learn, "estimate_run", counted("estimate_run", pipeline.estimate_run))
     monkeypatch.setattr(pipeline, "estimate_groups", groups)
-    refined = learn.learn([seg], options=learn.LearnOptions(subgoals=True))
+    fast = EstimateOptions(smc=SMCParams(particles=96))  # the counts, not the weights, are checked
+    refined = learn.learn([seg], options=learn.LearnOptions(fast, subgoals=True))
     assert len(calls["read_segmented"]) == len(calls["read_run"]) == len(calls["estimate_run"]) == 1
     assert refined.decisions, "the office demo has a decision point"
     base, sub = calls["problems"]  # the whole demo, then the refinement
     assert 0 < sub < base, calls
-    plain = learn.learn_run(read_segmented(seg), name=seg.name).table
+    plain = learn.learn_run(read_segmented(seg), options=learn.LearnOptions(fast), name=seg.name).table
     decided = {d.segment for d in refined.decisions}
     for i, (a, b) in enumerate(zip(plain.network.steps, refined.table.network.steps, strict=True)):
         if i in decided:
