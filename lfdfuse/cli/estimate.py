@@ -10,18 +10,19 @@ import typer
 from lfdfuse.cli.app import app
 from lfdfuse.cli.common import check_count, check_outputs, check_seed, console, progress_bar, user_errors
 from lfdfuse.cli.render import print_table
-from lfdfuse.errors import ConfigError
+from lfdfuse.estimate.methods import EstimateOptions, Likelihood, Method
 from lfdfuse.estimate.paper import PFParams
-from lfdfuse.estimate.pipeline import METHODS, EstimateOptions, estimate_file
 from lfdfuse.estimate.smc import SMCParams
+from lfdfuse.learn import LearnOptions, learn
+from lfdfuse.network.table import write_table
 
 
 @app.command("estimate")
 @user_errors
 def estimate_cmd(
     src: Path = typer.Argument(..., help="A segmented log (from `lfdfuse segment`)."),
-    method: str = typer.Option(
-        "pf",
+    method: Method = typer.Option(
+        Method.PF,
         "--method",
         "-m",
         help="pf (exact posterior: Dirichlet prior, von Mises heading noise, tempered SMC), paper (the "
@@ -37,8 +38,10 @@ def estimate_cmd(
         help="Independent samplers (pf, paper; one vectorised pass) or bootstrap fits (nnls, arbitration); "
         "their spread is reported as trial_std.",
     ),
-    likelihood: str = typer.Option(
-        "paper", "--likelihood", help="paper filter's likelihood: paper (2 - D/2, as published) or vonmises."
+    likelihood: Likelihood = typer.Option(
+        Likelihood.PAPER,
+        "--likelihood",
+        help="paper filter's likelihood: paper (2 - D/2, as published) or vonmises.",
     ),
     seed: int = typer.Option(0, "--seed", help="Seed of the filters' random draws."),
     subgoals: bool = typer.Option(
@@ -57,20 +60,17 @@ def estimate_cmd(
       lfdfuse estimate demo.seg.mcap --trials 30 -o fusion.yaml
       lfdfuse estimate demo.seg.mcap --method nnls -o nnls.yaml
     """
-    if method not in METHODS:
-        raise ConfigError(f"unknown method {method!r} (valid: {', '.join(METHODS)})")
-    if likelihood not in ("vonmises", "paper"):
-        raise ConfigError(f"unknown likelihood {likelihood!r} (valid: vonmises, paper)")
     check_count("--particles", particles, maximum=100_000)
     check_count("--trials", trials, maximum=1000)
     check_seed(seed)
     check_outputs([out], [src])
-    pf = replace(PFParams(), particles=particles, likelihood=likelihood)  # type: ignore[arg-type]
+    pf = replace(PFParams(), particles=particles, likelihood=likelihood.literal)
     smc = replace(SMCParams(), particles=particles)
-    opts = EstimateOptions(method=method, trials=trials, seed=seed, pf=pf, smc=smc)  # type: ignore[arg-type]
+    opts = EstimateOptions(method=method, trials=trials, seed=seed, pf=pf, smc=smc)
     with progress_bar("estimate") as update:
-        res = estimate_file(src, out=out, opts=opts, progress=update, subgoals=subgoals)
+        res = learn([src], options=LearnOptions(estimate=opts, subgoals=subgoals), progress=update)
+    write_table(res.table, out)
     console.print(
-        f"[bold]estimate[/bold] {src} → {res.out}  ({method}, {trials} trial{'s' if trials > 1 else ''}, {res.groups} groups)"
+        f"[bold]estimate[/bold] {src} → {out}  ({method}, {trials} trial{'s' if trials > 1 else ''}, {res.groups} groups)"
     )
     print_table(res.table)

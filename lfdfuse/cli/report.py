@@ -34,11 +34,13 @@ def report_cmd(
     """
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+    from lfdfuse.evaluate.paper.compare import rows
+    from lfdfuse.evaluate.paper.suite import PaperOptions, run_experiments
     from lfdfuse.viz.html import markdown_table  # matplotlib only when reporting
-    from lfdfuse.viz.report import ReportOptions, run_report
+    from lfdfuse.viz.report import write_report
 
     began = time.monotonic()
-    result = None
+    results = None
     with Progress(
         TextColumn("report"),
         BarColumn(),
@@ -50,10 +52,12 @@ def report_cmd(
         disable=not err_console.is_terminal,
     ) as bar:
         task = bar.add_task("", total=1)
-        for ev in run_report(ReportOptions(out=out, seed=seed, quick=quick)):
-            bar.update(task, total=ev.total, completed=ev.done, description=ev.label)
-            result = ev.result or result
-    assert result is not None
+        for ev in run_experiments(PaperOptions(logs=out / "logs", seed=seed, quick=quick)):
+            bar.update(task, total=ev.total + 1, completed=ev.done, description=ev.label)
+            results = ev.results or results
+        assert results is not None
+        bar.update(task, description="figures")
+        result = write_report(results, tuple(rows(results)), out=out)
     agree = sum(r.agrees is True for r in result.comparison)
     differ = sum(r.agrees is False for r in result.comparison)
     console.print(

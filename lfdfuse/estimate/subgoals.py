@@ -1,10 +1,10 @@
 """Sub-goals at decision points in the fusion table (issue 15).
 
-Two passes over a segmented demo. The first is the paper's: one fusion step per goal segment.
-Its fusion is then replayed over the demo (:func:`fused_vectors`); where the teacher turned
-off into an opening that fusion would have driven past, :mod:`lfdfuse.segment.decisions`
-finds a decision point. The second pass estimates the sub-segments on their own, and each goal
-step with decisions becomes a small network::
+:func:`refine` takes the paper's table of a segmented demo (one fusion step per goal segment,
+:func:`lfdfuse.estimate.pipeline.estimate_run`) and replays its fusion over the demo
+(:func:`fused_vectors`); where the teacher turned off into an opening that fusion would have
+driven past, :mod:`lfdfuse.segment.decisions` finds a decision point. Only the sub-segments of
+the goal segments with decisions are estimated, and each such goal step becomes a small network::
 
     reach-green:  to-left-opening-1 (landmark: 1st opening on the left)
                   turn-left-1       (landmark: turned ≥ 68° to the left)
@@ -17,14 +17,13 @@ on the style's route get the same table as before.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 
 from lfdfuse.errors import LogError
-from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
+from lfdfuse.estimate.pipeline import EstimateOptions, estimate_segments, run_rng
 from lfdfuse.estimate.replay import fused_vectors
-from lfdfuse.log.reader import read_run
+from lfdfuse.log.reader import Run
 from lfdfuse.network.landmarks import Landmark
 from lfdfuse.network.table import FusionTable, Network, Step
 from lfdfuse.segment.decisions import (
@@ -38,11 +37,10 @@ from lfdfuse.segment.decisions import (
 from lfdfuse.segment.read import SegmentedRun
 
 
-def track_of(path: str | Path, run: SegmentedRun) -> LandmarkTrack:
-    """Landmark cues of a segmented log's steps, from its ``/scan`` and ``/pose`` (odometry)."""
-    raw = read_run(path)
+def track_of(raw: Run, run: SegmentedRun, *, source: str = "the log") -> LandmarkTrack:
+    """Landmark cues of a segmented run's steps, from the same log's ``/scan`` and ``/pose`` (odometry)."""
     if raw.pose is None or len(raw.t_ns) != len(run.t_ns):
-        raise LogError(f"{path}: no odometry (/pose) on the scan clock: sub-goals need it")
+        raise LogError(f"{source}: no odometry (/pose) on the scan clock: sub-goals need it")
     return landmark_track(raw.ranges_m, raw.geometry, raw.pose)
 
 
@@ -52,16 +50,19 @@ class SubgoalResult:
     decisions: tuple[DecisionPoint, ...]
 
 
-def estimate_with_subgoals(
+def refine(
+    table: FusionTable,
     run: SegmentedRun,
     track: LandmarkTrack,
     *,
     opts: EstimateOptions,
-    name: str = "demo",
     params: DecisionParams = DecisionParams(),
 ) -> SubgoalResult:
-    """The fusion table of ``run`` with sub-goals at its decision points."""
-    table, _, _ = estimate_run(run, opts=opts, name=name)
+    """``table`` (the paper's table of ``run``) with sub-goals at the run's decision points.
+
+    Only the sub-segments of goal segments with a decision are estimated; every other step of
+    ``table`` is kept as it is.
+    """
     decisions = find_decisions(
         segments=run.segments,
         demo=run.demo,
@@ -76,14 +77,17 @@ def estimate_with_subgoals(
     seg_of = np.zeros_like(run.segment_of)
     for _, s in subs:
         seg_of[s.start : s.stop] = s.index
-    sub_run = replace(run, segments=tuple(s for _, s in subs), segment_of=seg_of)
-    sub_table, _, _ = estimate_run(sub_run, opts=opts, name=name)
+    decided = {d.segment for d in decisions}
+    new = [(orig, s) for orig, s in subs if orig in decided]
+    sub_run = replace(run, segments=tuple(s for _, s in new), segment_of=seg_of)
+    est = estimate_segments(sub_run, opts=opts, rng=run_rng(run, opts), table_default=False)
+    sub_steps = dict(zip((s.index for _, s in new), est.steps, strict=True))
     steps = list(table.network.steps)
     for seg in run.segments:
         mine = [d for d in decisions if d.segment == seg.index]
         if not mine:
             continue
-        parts = [sub_table.network.steps[s.index] for orig, s in subs if orig == seg.index]
+        parts = [sub_steps[s.index] for orig, s in new if orig == seg.index]
         inner: list[Step] = []
         for k, d in enumerate(mine):
             drive, turn = parts[2 * k], parts[2 * k + 1]

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
+from lfdfuse.estimate.pipeline import EstimateOptions, Method, estimate_run
 from lfdfuse.estimate.replay import fused_vectors
 from lfdfuse.network.table import FusionTable
 from lfdfuse.segment.goals import GoalSegment
@@ -147,8 +147,8 @@ def evaluate(
     demo = np.arctan2(test.demo[test_steps, 1], test.demo[test_steps, 0])
     offset = int(test.segment_of[0]) if len(test.segment_of) else 0
     predictions: dict[str, np.ndarray] = {}
-    fits = [("fused", train, base), ("nnls", train, replace(base, method="nnls"))]
-    fits += [("arbitration", train, replace(base, method="arbitration")), ("oracle", test, base)]
+    fits = [("fused", train, base), ("nnls", train, replace(base, method=Method.NNLS))]
+    fits += [("arbitration", train, replace(base, method=Method.ARBITRATION)), ("oracle", test, base)]
     for k, (name, part, eo) in enumerate(fits):
         table, _, _ = estimate_run(part, opts=eo, name=name)
         predictions[name] = predict(table, test, test_steps, segment_offset=offset if part is test else 0)

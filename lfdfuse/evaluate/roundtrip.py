@@ -10,17 +10,15 @@ Weights are those the runtime uses: the row's, else the step's default, else the
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from lfdfuse import learn
 from lfdfuse.estimate.baselines import angle_errors, heading_fit_weights
 from lfdfuse.estimate.replay import fused_vectors, leaf_steps, runtime_weights
-from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.network.table import FusionTable, Step, load_table
-from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.segment.read import SegmentedRun, read_segmented
 from lfdfuse.world.model import load_world
 
@@ -58,15 +56,16 @@ def demonstrate(
     noise_rad: float = TEACHER_NOISE_RAD,
 ) -> Demo:
     """Drive the network teacher with ``truth`` (``simulate --teacher``), segment with its behaviours."""
-    raw, seg = folder / f"{world}-{seed}.mcap", folder / f"{world}-{seed}.seg.mcap"
-    opts = ExecuteOptions(
-        world=load_world(world), table=truth, max_time_s=duration_s, seed=seed, heading_noise_rad=noise_rad
+    demo = learn.demonstrate(
+        truth,
+        world=load_world(world),
+        folder=folder,
+        name=f"{world}-{seed}",
+        duration_s=duration_s,
+        seed=seed,
+        heading_noise_rad=noise_rad,
     )
-    t0 = time.perf_counter()
-    drive_table(opts, out=raw, command="simulate", teacher=True)
-    elapsed = time.perf_counter() - t0
-    segment_file(raw, out=seg, behaviors=",".join(truth.behaviors))
-    return Demo(read_segmented(seg), elapsed)
+    return Demo(read_segmented(demo.segmented), demo.wall_s)
 
 
 def effective_weights(table: FusionTable, step: Step, bac: int) -> np.ndarray:

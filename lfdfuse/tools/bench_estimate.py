@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
+from lfdfuse.estimate.pipeline import EstimateOptions, Method
 from lfdfuse.evaluate.roundtrip import (
     TEACHER_NOISE_RAD,
     compare_rows,
@@ -31,6 +31,7 @@ from lfdfuse.evaluate.roundtrip import (
     load_truth,
     truth_names,
 )
+from lfdfuse.learn import LearnOptions, learn_run
 
 
 def _weights(names: tuple[str, ...], w: np.ndarray) -> str:
@@ -51,9 +52,11 @@ def run(quick: bool) -> list[dict[str, Any]]:
             for seed in seeds:
                 demo = demonstrate(truth, world, seed=seed, duration_s=duration, folder=Path(tmp))
                 t0 = time.perf_counter()
-                learned, _, _ = estimate_run(demo.run, opts=EstimateOptions(seed=seed))
+                learned = learn_run(demo.run, options=LearnOptions(EstimateOptions(seed=seed))).table
                 cost = time.perf_counter() - t0
-                paper, _, _ = estimate_run(demo.run, opts=EstimateOptions(method="paper", seed=seed))
+                paper = learn_run(
+                    demo.run, options=LearnOptions(EstimateOptions(Method.PAPER, seed=seed))
+                ).table
                 old = {
                     (r.step, r.bac): r
                     for r in compare_rows(truth, paper, demo.run, noise_rad=TEACHER_NOISE_RAD)

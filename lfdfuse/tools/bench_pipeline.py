@@ -258,7 +258,9 @@ def bench_pf(rows: list[Row], folder: Path) -> None:
 
 
 def bench_estimate(rows: list[Row], folder: Path) -> None:
-    from lfdfuse.estimate.pipeline import EstimateOptions, estimate_file
+    from lfdfuse.estimate.pipeline import EstimateOptions
+    from lfdfuse.learn import LearnOptions, learn
+    from lfdfuse.network.table import write_table
     from lfdfuse.segment.pipeline import segment_file
 
     seg = folder / "demo600.seg.mcap"
@@ -266,7 +268,9 @@ def bench_estimate(rows: list[Row], folder: Path) -> None:
         segment_file(_demo(folder, 600.0), out=seg)
     for trials in (1, 30):
         t0 = time.perf_counter()
-        estimate_file(seg, out=folder / "f.yaml", opts=EstimateOptions(trials=trials))
+        write_table(
+            learn([seg], options=LearnOptions(EstimateOptions(trials=trials))).table, folder / "f.yaml"
+        )
         rows.append(
             Row(
                 f"estimate end to end, 10-minute demo, K={trials} (s)",
@@ -279,22 +283,14 @@ def bench_estimate(rows: list[Row], folder: Path) -> None:
 
 
 def bench_execute(rows: list[Row], folder: Path) -> None:
-    from lfdfuse.estimate.pipeline import EstimateOptions, estimate_file
     from lfdfuse.execute.run import ExecuteOptions, drive_table
-    from lfdfuse.network.table import load_table
-    from lfdfuse.segment.pipeline import segment_file
+    from lfdfuse.learn import demonstrate, learn
 
     world = load_world("building")
     legs = [Leg("red", "keep-left"), Leg("green", "keep-center"), Leg("blue", "keep-right")]
-    demo = folder / "task.mcap"
-    t0 = time.perf_counter()
-    s = simulate(
-        SimulateOptions(world=world, legs=legs, teacher_name="task", duration_s=400.0, seed=1), out=demo
-    )
-    sim_rate = s.steps / (time.perf_counter() - t0)
-    segment_file(demo, out=folder / "task.seg.mcap")
-    estimate_file(folder / "task.seg.mcap", out=folder / "task.yaml", opts=EstimateOptions())
-    table = load_table(folder / "task.yaml")
+    demo = demonstrate(legs, world=world, folder=folder, name="task", duration_s=400.0, seed=1)
+    sim_rate = demo.steps / demo.wall_s
+    table = learn([demo.segmented]).table
     t0 = time.perf_counter()
     r = drive_table(
         ExecuteOptions(world=world, table=table, max_time_s=300.0), out=folder / "run.mcap", command="execute"

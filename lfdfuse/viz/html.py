@@ -8,8 +8,8 @@ from pathlib import Path
 from typing import Any, Protocol
 
 from lfdfuse import __version__
+from lfdfuse.evaluate.paper.compare import Row
 from lfdfuse.files import write_text_atomic
-from lfdfuse.viz.compare import Row
 
 _CSS = """
 body { font-family: system-ui, sans-serif; max-width: 1100px; margin: 2em auto; padding: 0 1em; color: #222; }

@@ -14,9 +14,10 @@ from typer.testing import CliRunner
 
 from lfdfuse.cli.main import app
 from lfdfuse.errors import ConfigError
-from lfdfuse.estimate.pipeline import EstimateOptions, estimate_file, estimate_run
+from lfdfuse.estimate.pipeline import EstimateOptions, Method, estimate_run
 from lfdfuse.estimate.smc import SMCParams
-from lfdfuse.network.table import dump_table, load_table, parse_table
+from lfdfuse.learn import LearnOptions, learn
+from lfdfuse.network.table import dump_table, load_table, parse_table, write_table
 from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.segment.read import read_segmented
 from tests.conftest import ROOT
@@ -126,9 +127,10 @@ def segmented(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return out
 
 
-@pytest.mark.parametrize("method", ["pf", "paper", "nnls", "arbitration"])
-def test_estimate_on_the_sample_demo(segmented: Path, tmp_path: Path, method: str) -> None:
-    res = estimate_file(segmented, out=tmp_path / "f.yaml", opts=EstimateOptions(method=method, trials=2))  # type: ignore[arg-type]
+@pytest.mark.parametrize("method", list(Method))
+def test_estimate_on_the_sample_demo(segmented: Path, tmp_path: Path, method: Method) -> None:
+    res = learn([segmented], options=LearnOptions(EstimateOptions(method=method, trials=2)))
+    write_table(res.table, tmp_path / "f.yaml")
     loaded = load_table(tmp_path / "f.yaml")
     assert loaded.behaviors == res.table.behaviors
     jsonschema.validate(yaml.safe_load((tmp_path / "f.yaml").read_text()), SCHEMA)
@@ -141,7 +143,8 @@ def test_estimate_on_the_sample_demo(segmented: Path, tmp_path: Path, method: st
             assert sum(row.weights.values()) == pytest.approx(1.0, abs=1e-3)
             assert row.low_samples == (row.samples is not None and row.samples < 30)
             assert row.trial_std is not None and set(row.trial_std) == set(row.weights)
-            assert (row.identifiable is not None) == (method == "pf")
+            assert (row.identifiable is not None) == (method is Method.PF)
+    assert res.table.estimated_by["method"] == method.value
 
 
 def test_styles_show_in_the_learned_weights(segmented: Path) -> None:
@@ -168,7 +171,7 @@ def test_styles_show_in_the_learned_weights(segmented: Path) -> None:
 def test_estimate_is_reproducible(segmented: Path, tmp_path: Path) -> None:
     for name in ("a", "b"):
         opts = EstimateOptions(seed=4, trials=2, smc=SMCParams(particles=96))
-        estimate_file(segmented, out=tmp_path / f"{name}.yaml", opts=opts)
+        write_table(learn([segmented], options=LearnOptions(opts)).table, tmp_path / f"{name}.yaml")
     assert (tmp_path / "a.yaml").read_text() == (tmp_path / "b.yaml").read_text()
 
 
@@ -186,7 +189,9 @@ def test_estimate_cli(segmented: Path, tmp_path: Path, sample_dir: Path) -> None
         bad = runner.invoke(app, ["estimate", str(sample_dir / "keep-left-building.mcap"), "-o", "x.yaml"])
         assert bad.exit_code == 1 and "run `lfdfuse segment" in bad.stderr
         bad = runner.invoke(app, ["estimate", str(segmented), "--method", "magic", "-o", "x.yaml"])
-        assert bad.exit_code == 1 and "unknown method 'magic'" in bad.stderr
+        assert bad.exit_code == 2 and "magic" in bad.stderr  # a usage error: typer offers the choices
+        bad = runner.invoke(app, ["estimate", str(segmented), "--likelihood", "magic", "-o", "x.yaml"])
+        assert bad.exit_code == 2 and "magic" in bad.stderr
         assert sorted(os.listdir(tmp_path)) == before
     finally:
         os.chdir(old)

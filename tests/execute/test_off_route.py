@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from typing import Any
 
 import jsonschema
 import numpy as np
@@ -17,11 +18,11 @@ import yaml
 
 from lfdfuse.behaviors.landmarks import OpeningParams, OpeningSensor, opening_onsets, side_openings
 from lfdfuse.errors import ConfigError
+from lfdfuse.evaluate.offroute import CASES, demonstrate, learn_case, perturbed_starts, run_starts
 from lfdfuse.network.landmarks import Cues, Landmark, Progress
 from lfdfuse.network.runtime import NetworkRuntime
 from lfdfuse.network.table import dump_table, parse_table
 from lfdfuse.sim.sensors import LaserParams
-from lfdfuse.tools.bench_offroute import CASES, demonstrate, learn, perturbed_starts, run_starts
 from lfdfuse.world.model import load_world
 from tests.conftest import ROOT
 
@@ -160,7 +161,7 @@ def office(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, object]:
 def test_a_turn_into_an_office_off_the_route_is_reproduced(office: tuple[Path, Path]) -> None:
     tmp, seg = office
     case = CASES["office-room"]
-    table = learn(seg, subgoals=True)
+    table = learn_case(seg, subgoals=True)
     inner = table.network.steps[1].network
     assert inner is not None, "the turn into the office is a decision point"
     assert inner.steps[0].landmark is not None and inner.steps[0].landmark.side == "right"
@@ -172,7 +173,7 @@ def test_a_turn_into_an_office_off_the_route_is_reproduced(office: tuple[Path, P
 def test_a_turn_into_a_dead_end_spur_off_the_route_is_reproduced(tmp_path: Path) -> None:
     case = CASES["ring-spur"]
     seg = demonstrate(case, folder=tmp_path)
-    table = learn(seg, subgoals=True)
+    table = learn_case(seg, subgoals=True)
     inner = table.network.steps[1].network
     assert inner is not None, "the turn into the spur is a decision point"
     assert inner.steps[0].landmark is not None and inner.steps[0].landmark.side == "left"
@@ -195,3 +196,48 @@ def test_estimate_subgoals_from_the_command_line(office: tuple[Path, Path], tmp_
     assert any(s.network is not None and any(x.landmark is not None for x in s.network.steps) for s in steps)
     shown = CliRunner().invoke(app, ["inspect", str(out)])
     assert shown.exit_code == 0 and "opening on the" in shown.output
+
+
+def test_subgoals_read_the_log_once_and_refine_the_table_they_are_given(
+    office: tuple[Path, Path], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """One read of each kind, one estimate of the whole demo, then only the new sub-segment rows."""
+    import lfdfuse.estimate.pipeline as pipeline
+    from lfdfuse import learn
+    from lfdfuse.estimate.methods import EstimateOptions, estimate_groups
+    from lfdfuse.estimate.smc import SMCParams
+    from lfdfuse.log.reader import read_run
+    from lfdfuse.segment.read import read_segmented
+
+    _tmp, seg = office
+    calls: dict[str, list[int]] = {"read_segmented": [], "read_run": [], "estimate_run": [], "problems": []}
+
+    def counted(name: str, fn: Any) -> Any:
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            calls[name].append(1)
+            return fn(*args, **kwargs)
+
+        return wrapper
+
+    def groups(problems: Any, **kwargs: Any) -> Any:
+        calls["problems"].append(len(problems))
+        return estimate_groups(problems, **kwargs)
+
+    monkeypatch.setattr(learn, "read_segmented", counted("read_segmented", read_segmented))
+    monkeypatch.setattr(learn, "read_run", counted("read_run", read_run))
+    monkeypatch.setattr(learn, "estimate_run", counted("estimate_run", pipeline.estimate_run))
+    monkeypatch.setattr(pipeline, "estimate_groups", groups)
+    fast = EstimateOptions(smc=SMCParams(particles=96))  # the counts, not the weights, are checked
+    refined = learn.learn([seg], options=learn.LearnOptions(fast, subgoals=True))
+    assert len(calls["read_segmented"]) == len(calls["read_run"]) == len(calls["estimate_run"]) == 1
+    assert refined.decisions, "the office demo has a decision point"
+    base, sub = calls["problems"]  # the whole demo, then the refinement
+    assert 0 < sub < base, calls
+    plain = learn.learn_run(read_segmented(seg), options=learn.LearnOptions(fast), name=seg.name).table
+    decided = {d.segment for d in refined.decisions}
+    for i, (a, b) in enumerate(zip(plain.network.steps, refined.table.network.steps, strict=True)):
+        if i in decided:
+            assert b.network is not None and b.name == a.name and b.goal == a.goal
+        else:
+            assert a == b, f"step {i} has no decision: refine keeps it as given"
+    assert refined.table.default_weights == plain.default_weights

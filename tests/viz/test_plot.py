@@ -15,14 +15,12 @@ from matplotlib.image import imread
 from typer.testing import CliRunner
 
 from lfdfuse.cli.main import app
-from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
+from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.learn import LearnOptions, demonstrate, learn
 from lfdfuse.log import lfd
 from lfdfuse.log.messages import TOPICS
 from lfdfuse.network.table import write_table
-from lfdfuse.segment.pipeline import segment_file
-from lfdfuse.segment.read import read_segmented
-from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import Leg
 from lfdfuse.viz import colors
 from lfdfuse.viz.load import load_log
@@ -37,14 +35,13 @@ runner = CliRunner()
 def files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """A short three-goal demo in building (goals reached), its segmented log, table and a run."""
     tmp = tmp_path_factory.mktemp("plot")
-    demo, seg, table, run = tmp / "d.mcap", tmp / "d.seg.mcap", tmp / "t.yaml", tmp / "r.mcap"
+    table, run = tmp / "t.yaml", tmp / "r.mcap"
     legs = [Leg("red", "keep-left"), Leg("green", "keep-center")]
-    simulate(
-        SimulateOptions(world=load_world("building"), legs=legs, teacher_name="task", duration_s=120, seed=1),
-        out=demo,
+    d = demonstrate(
+        legs, world=load_world("building"), folder=tmp, name="d", duration_s=120, seed=1, measure_lag=False
     )
-    segment_file(demo, out=seg, measure_lag=False)
-    tab, _, _ = estimate_run(read_segmented(seg), opts=EstimateOptions(seed=1, trials=2), name="d")
+    demo, seg = d.raw, d.segmented
+    tab = learn([seg], options=LearnOptions(EstimateOptions(seed=1, trials=2))).table
     write_table(tab, table)
     drive_table(
         ExecuteOptions(world=load_world("building"), table=tab, max_time_s=90), out=run, command="execute"

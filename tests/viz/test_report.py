@@ -1,4 +1,7 @@
-"""``lfdfuse report --quick``: every experiment runs, the figures are images, the table compares."""
+"""``lfdfuse report --quick``: every experiment runs, the figures are images, the table compares.
+
+The experiments (:mod:`lfdfuse.evaluate.paper`) run once for the module; the report is drawn
+from their results, as ``lfdfuse report`` composes it."""
 
 from __future__ import annotations
 
@@ -10,27 +13,41 @@ from matplotlib.image import imread
 from typer.testing import CliRunner
 
 from lfdfuse.cli.main import app
-from lfdfuse.viz.report import ReportEvent, ReportOptions, run_report
+from lfdfuse.evaluate.paper.compare import rows
+from lfdfuse.evaluate.paper.records import PaperResults
+from lfdfuse.evaluate.paper.suite import ExperimentEvent, PaperOptions, run_experiments
+from lfdfuse.viz.report import ReportResult, write_report
+
+Report = tuple[Path, list[ExperimentEvent], ReportResult]
 
 
 @pytest.fixture(scope="module")
-def report(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[ReportEvent]]:
+def report(tmp_path_factory: pytest.TempPathFactory) -> Report:
     out = tmp_path_factory.mktemp("paper") / "report"
-    events = list(run_report(ReportOptions(out=out, seed=1, quick=True)))
-    return out, events
+    events = list(run_experiments(PaperOptions(logs=out / "logs", seed=1, quick=True)))
+    results = events[-1].results
+    assert results is not None
+    return out, events, write_report(results, tuple(rows(results)), out=out)
 
 
-def test_progress_events_count_up_to_a_result(report: tuple[Path, list[ReportEvent]]) -> None:
-    _out, events = report
+def test_progress_events_count_up_to_the_results(report: Report) -> None:
+    _out, events, _result = report
     done = [e.done for e in events]
     assert done == sorted(done) and done[0] == 0 and done[-1] == events[-1].total
-    assert all(e.result is None for e in events[:-1]) and events[-1].result is not None
+    assert all(e.results is None for e in events[:-1]) and isinstance(events[-1].results, PaperResults)
 
 
-def test_index_html_has_the_comparison_and_every_figure(report: tuple[Path, list[ReportEvent]]) -> None:
-    out, events = report
-    result = events[-1].result
-    assert result is not None
+def test_the_results_are_frozen_records(report: Report) -> None:
+    results = report[1][-1].results
+    assert results is not None
+    with pytest.raises(AttributeError):
+        results.seed = 2  # type: ignore[misc]
+    assert all(isinstance(v, tuple) for v in results.runs.values())
+    assert {"keep-left", "task", "trials", "pass-left"} <= set(results.learned)
+
+
+def test_index_html_has_the_comparison_and_every_figure(report: Report) -> None:
+    out, _events, result = report
     html = (out / "index.html").read_text()
     assert html.count("<tr>") == len(result.comparison) + 1
     assert len(result.comparison) >= 10
@@ -42,8 +59,8 @@ def test_index_html_has_the_comparison_and_every_figure(report: tuple[Path, list
         assert img[:, :, :3].std() > 0.05, fig.file  # not a blank canvas
 
 
-def test_report_json_has_every_number(report: tuple[Path, list[ReportEvent]]) -> None:
-    out, _events = report
+def test_report_json_has_every_number(report: Report) -> None:
+    out, _events, _result = report
     data = json.loads((out / "report.json").read_text())
     assert data["format"] == "lfdfuse/paper-report@1" and data["quick"] is True
     rows = data["comparison"]

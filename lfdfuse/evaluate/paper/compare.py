@@ -8,16 +8,17 @@ building, robot or demonstrator makes the count itself incomparable).
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+import math
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
 
-from lfdfuse.network.table import FusionTable
+from lfdfuse.evaluate.paper.experiments import step_of_ticks
+from lfdfuse.evaluate.paper.records import Learned, PaperResults, Run, passing_sides, task_order
+from lfdfuse.network.table import FusionRow, FusionTable, Network
 from lfdfuse.segment.read import read_segmented
-from lfdfuse.viz.experiments import Learned, Run, passing_sides, step_of_ticks, task_order
-from lfdfuse.viz.load import table_steps
 from lfdfuse.world.model import load_world
 
 SIDE = {"keep-left": "left", "keep-center": "centre", "keep-right": "right"}
@@ -41,7 +42,7 @@ def _lr(run: Run) -> str:
     return f"left {r['left_range_mean_m']:.2f} m / right {r['right_range_mean_m']:.2f} m"
 
 
-def _count(runs: list[Run], style: str) -> int:
+def _count(runs: Sequence[Run], style: str) -> int:
     return sum(r.style == style and r.report["collisions"] == 0 for r in runs)
 
 
@@ -50,7 +51,7 @@ def task_ok(run: Run) -> bool:
     return bool(rep["completed"]) and task_order(rep) == ["red", "green", "blue"] and rep["collisions"] == 0
 
 
-def task_steps_kept(runs: list[Run]) -> tuple[int, int]:
+def task_steps_kept(runs: Sequence[Run]) -> tuple[int, int]:
     """(steps whose style matched the demonstrated one, steps judged) over the completed runs."""
     want = {"reach-red": "left", "reach-green": "centre", "reach-blue": "right"}
     good = total = 0
@@ -76,7 +77,9 @@ def corridor_sides(left_m: np.ndarray, right_m: np.ndarray, *, sight_m: float = 
     return float(np.median(left_m[both])), float(np.median(right_m[both]))
 
 
-def style_errors(learned: dict[str, Learned], runs: dict[str, list[Run]]) -> list[tuple[str, float, float]]:
+def style_errors(
+    learned: Mapping[str, Learned], runs: Mapping[str, Sequence[Run]]
+) -> list[tuple[str, float, float]]:
     """``(label, left error, right error)``: the runs' distance to each wall minus the demonstration's
     (m), both as :func:`corridor_sides`; the task's steps against their goal segments."""
     out = []
@@ -111,6 +114,26 @@ def style_errors(learned: dict[str, Learned], runs: dict[str, list[Run]]) -> lis
     return out
 
 
+@dataclass(frozen=True)
+class _StepRows:
+    name: str  # nested steps as ``outer/inner``
+    goal: str | None
+    rows: tuple[FusionRow, ...]
+
+
+def table_steps(table: FusionTable) -> list[_StepRows]:
+    """Every fusion primitive of a table, depth first (a nested network's steps in its place)."""
+
+    def walk(net: Network, prefix: str) -> Iterator[_StepRows]:
+        for s in net.steps:
+            if s.network is not None:
+                yield from walk(s.network, f"{prefix}{s.name}/")
+            else:
+                yield _StepRows(f"{prefix}{s.name}", s.goal, s.fusion)
+
+    return list(walk(table.network, ""))
+
+
 def weight_stats(table: FusionTable) -> dict[str, Any]:
     """Per goal step: its BAC rows with samples and spreads; overall: median and largest spread."""
     steps = []
@@ -143,15 +166,10 @@ def weight_stats(table: FusionTable) -> dict[str, Any]:
     }
 
 
-def rows(
-    learned: dict[str, Learned],
-    runs: dict[str, list[Run]],
-    junctions: dict[str, dict[str, str]],
-    errors: list[tuple[str, float, float]],
-    *,
-    quick: bool,
-) -> Iterator[Row]:
+def rows(results: PaperResults) -> Iterator[Row]:
     """The comparison rows, in the paper's order."""
+    learned, runs, junctions = results.learned, results.runs, results.junctions
+    errors, quick = results.style_errors, results.quick
     yield Row(
         "single wall-attract behaviour set",
         "Sec. V-A Scenario 1; Fig. 5",
@@ -305,4 +323,48 @@ def rows(
         "; ".join(parts),
         ok,
         "The paper had four demonstrations (centre or side, passing left or right); we run two (pass left, pass right).",
+    )
+
+
+def _clean(x: Any) -> Any:
+    """Floats rounded to 1e-4 (non-finite ones as None), containers walked: JSON-ready."""
+    if isinstance(x, float):
+        return None if not math.isfinite(x) else round(x, 4)
+    if isinstance(x, dict):
+        return {k: _clean(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_clean(v) for v in x]
+    return x
+
+
+def numbers(
+    results: PaperResults, rows: Sequence[Row], *, figures: Sequence[dict[str, str]] = ()
+) -> dict[str, Any]:
+    """Every number of the report (``report.json``): the comparison, each demo, each run, the weights."""
+    learned = {
+        k: {
+            "style": v.style,
+            "world": v.world,
+            "demo": v.demo.name,
+            "table": v.table_path.name,
+            "seconds": v.seconds,
+            "demo_left_range_mean_m": v.demo_left_m,
+            "demo_right_range_mean_m": v.demo_right_m,
+            "demo_style": v.demo_style,
+        }
+        for k, v in results.learned.items()
+    }
+    return _clean(
+        {
+            "format": "lfdfuse/paper-report@1",
+            "seed": results.seed,
+            "quick": results.quick,
+            "trials": results.trials,
+            "comparison": [r.as_dict() for r in rows],
+            "learned": learned,
+            "runs": {k: [r.summary() for r in v] for k, v in results.runs.items()},
+            "junctions": {k: dict(v) for k, v in results.junctions.items()},
+            "weights": weight_stats(results.learned["trials"].table),
+            "figures": list(figures),
+        }
     )

@@ -1,0 +1,259 @@
+"""The estimation methods: a :class:`Method` enum and its registry, method → row estimator.
+
+Every method estimates the weights of many *problems* at once — a problem is one group's
+``(vectors (T, n, 2), demo (T, 2))`` — and names what it used in the table's provenance
+(``estimated_by``). :data:`REGISTRY` holds one :class:`Estimator` per :class:`Method`; adding a
+method is adding an enum member and its entry, and nothing falls through to a default branch.
+
+``pf`` samples every problem in one batched tempered SMC pass (:mod:`lfdfuse.estimate.smc`);
+``paper`` runs the published particle filter (:mod:`lfdfuse.estimate.paper`) per problem;
+``nnls`` and ``arbitration`` are the baselines (:mod:`lfdfuse.estimate.baselines`), with
+bootstrap fits as their trials.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from enum import StrEnum
+
+import numpy as np
+
+from lfdfuse.errors import ConfigError
+from lfdfuse.estimate.baselines import arbitration_weights, nnls_weights
+from lfdfuse.estimate.identifiability import identifiable
+from lfdfuse.estimate.model import FusionModel, row_data, sum_cos
+from lfdfuse.estimate.paper import Likelihood as LikelihoodName
+from lfdfuse.estimate.paper import PFParams, normalise, run_filter
+from lfdfuse.estimate.smc import SMCParams, TemperedSMC
+
+#: one group's ``(vectors (T, n, 2), demo (T, 2))``
+Problem = tuple[np.ndarray, np.ndarray]
+
+
+class Method(StrEnum):
+    """How a group's weights are estimated (``estimate --method``)."""
+
+    #: the exact posterior: Dirichlet prior, von Mises heading noise, tempered SMC
+    PF = "pf"
+    #: the paper's particle filter as published
+    PAPER = "paper"
+    #: non-negative least squares on the demonstrated vector
+    NNLS = "nnls"
+    #: the best single behaviour (arbitration, the paper's foil)
+    ARBITRATION = "arbitration"
+
+
+class Likelihood(StrEnum):
+    """The paper filter's likelihood (``estimate --likelihood``)."""
+
+    #: ``2 - D/2`` as published
+    PAPER = "paper"
+    #: a von Mises density of the heading error
+    VONMISES = "vonmises"
+
+    @property
+    def literal(self) -> LikelihoodName:
+        """The name :class:`~lfdfuse.estimate.paper.PFParams` takes."""
+        return self.value
+
+
+@dataclass(frozen=True)
+class EstimateOptions:
+    method: Method = Method.PF
+    trials: int = 1
+    seed: int = 0
+    model: FusionModel = field(default_factory=FusionModel)  # pf: prior and noise model
+    smc: SMCParams = field(default_factory=SMCParams)  # pf: the sampler
+    pf: PFParams = field(default_factory=PFParams)  # paper: the published filter
+    min_samples: int = 30  # rows with fewer informative steps are flagged low_samples
+
+
+@dataclass(frozen=True)
+class RowEstimate:
+    """One group's estimate over its ``n`` applicable behaviours."""
+
+    weights: np.ndarray  # (n,) summing to 1
+    std: np.ndarray  # (n,) posterior std (pf), else the spread over trials
+    trial_std: np.ndarray | None  # (n,) spread of the trials' estimates, when trials > 1
+    identifiable: bool | None  # pf only: False when the prior decides some direction
+
+
+@dataclass(frozen=True)
+class Estimator:
+    """A method's row estimator and the provenance entries it adds to the table."""
+
+    rows: Callable[[Sequence[Problem], EstimateOptions, np.random.Generator], list[RowEstimate]]
+    provenance: Callable[[EstimateOptions], dict[str, object]]
+
+
+#: chains (rows × trials) per sampler pass: bounds the sampler's memory (chains × particles × κ nodes)
+CHAIN_BATCH = 128
+
+
+def _pf_rows(
+    problems: Sequence[Problem], opts: EstimateOptions, rng: np.random.Generator
+) -> list[RowEstimate]:
+    """One batched SMC pass over every problem with ≥ 2 behaviours and ≥ 1 step."""
+    out: list[RowEstimate | None] = [None] * len(problems)
+    todo = []
+    for i, (vec, _demo) in enumerate(problems):
+        n = vec.shape[1]
+        if n == 1:
+            out[i] = RowEstimate(np.ones(1), np.zeros(1), np.zeros(1) if opts.trials > 1 else None, True)
+        elif vec.shape[0] == 0:  # no data: the prior, which pins nothing
+            prior_sd = math.sqrt((n - 1) / (n * n * (n * opts.model.alpha + 1.0)))
+            out[i] = RowEstimate(np.full(n, 1.0 / n), np.full(n, prior_sd), None, False)
+        else:
+            todo.append(i)
+    k = opts.trials
+    # rows are sampled in batches: the sampler's arrays grow with the rows it holds, and an
+    # hour-long demo has hundreds of rows (a batch is one pass for any ordinary demo)
+    per_pass = max(1, CHAIN_BATCH // k)
+    for b in range(0, len(todo), per_pass):
+        batch = todo[b : b + per_pass]
+        datas = [row_data(*problems[i]) for i in batch]
+        smc = TemperedSMC(datas, trials=k, model=opts.model, params=opts.smc, rng=rng)
+        res = smc.run()
+        means, covs, particles = res.mean(), res.cov(), res.weights
+        for j, i in enumerate(batch):
+            n = problems[i][0].shape[1]
+            cov = covs[j * k : (j + 1) * k, :n, :n].mean(axis=0)
+            pinned = identifiable(cov, opts.model)
+            if pinned:
+                # the data pins the row: report the posterior mode (the most likely posterior
+                # particle), which lands as close to the truth as a heading fit; a posterior mean
+                # is pulled off the simplex's edges, where sparse rows live, by the posterior's width
+                w = particles[j * k : (j + 1) * k, :, :n]  # (K, M, n)
+                best = np.array([trial[int(np.argmax(sum_cos(datas[j], trial)))] for trial in w])  # (K, n)
+            else:
+                # the data leaves a direction open: the posterior mean, where the prior decides it
+                best = means[j * k : (j + 1) * k, :n]
+            out[i] = RowEstimate(
+                normalise(best.mean(axis=0)),
+                np.sqrt(np.maximum(np.diag(cov), 0.0)),
+                best.std(axis=0) if k > 1 else None,
+                pinned,
+            )
+    return [r for r in out if r is not None]
+
+
+def _single(k: int) -> RowEstimate:
+    return RowEstimate(np.ones(1), np.zeros(1), np.zeros(1) if k > 1 else None, None)
+
+
+def _paper_rows(
+    problems: Sequence[Problem], opts: EstimateOptions, rng: np.random.Generator
+) -> list[RowEstimate]:
+    out = []
+    k = opts.trials
+    for vectors, demo in problems:
+        if vectors.shape[1] == 1:
+            out.append(_single(k))
+            continue
+        res = run_filter(vectors, demo, trials=k, rng=rng, params=opts.pf)
+        spread = res.weights.std(axis=0) if k > 1 else None
+        out.append(RowEstimate(normalise(res.weights.mean(axis=0)), res.spread.mean(axis=0), spread, None))
+    return out
+
+
+def _fit_rows(
+    fit: Callable[[np.ndarray, np.ndarray], np.ndarray],
+) -> Callable[[Sequence[Problem], EstimateOptions, np.random.Generator], list[RowEstimate]]:
+    """A heading fit per problem; ``trials > 1``: the mean and spread of bootstrap fits."""
+
+    def rows(
+        problems: Sequence[Problem], opts: EstimateOptions, rng: np.random.Generator
+    ) -> list[RowEstimate]:
+        out = []
+        k = opts.trials
+        for vectors, demo in problems:
+            t, n, _ = vectors.shape
+            if n == 1:
+                out.append(_single(k))
+            elif k == 1:
+                out.append(RowEstimate(normalise(fit(vectors, demo)), np.zeros(n), None, None))
+            else:
+                boots = np.array(
+                    [
+                        normalise(fit(vectors[idx], demo[idx]))
+                        for idx in (rng.integers(0, t, t) for _ in range(k))
+                    ]
+                )
+                out.append(
+                    RowEstimate(normalise(boots.mean(axis=0)), boots.std(axis=0), boots.std(axis=0), None)
+                )
+        return out
+
+    return rows
+
+
+def _pf_provenance(opts: EstimateOptions) -> dict[str, object]:
+    return {
+        "particles": opts.smc.particles,
+        "prior": f"dirichlet({opts.model.alpha:g})",
+        "noise": "vonmises, kappa marginalised",
+    }
+
+
+def _paper_provenance(opts: EstimateOptions) -> dict[str, object]:
+    return {"particles": opts.pf.particles, "likelihood": opts.pf.likelihood}
+
+
+def _none(opts: EstimateOptions) -> dict[str, object]:
+    return {}
+
+
+REGISTRY: dict[Method, Estimator] = {
+    Method.PF: Estimator(_pf_rows, _pf_provenance),
+    Method.PAPER: Estimator(_paper_rows, _paper_provenance),
+    Method.NNLS: Estimator(_fit_rows(nnls_weights), _none),
+    Method.ARBITRATION: Estimator(_fit_rows(arbitration_weights), _none),
+}
+
+
+def method_of(value: Method | str) -> Method:
+    """The :class:`Method` named ``value``; a :class:`ConfigError` naming the valid ones otherwise."""
+    try:
+        return Method(value)
+    except ValueError:
+        valid = ", ".join(m.value for m in Method)
+        raise ConfigError(f"unknown method {str(value)[:40]!r} (valid: {valid})") from None
+
+
+def estimator(value: Method | str) -> Estimator:
+    return REGISTRY[method_of(value)]
+
+
+def check_options(opts: EstimateOptions) -> None:
+    """A :class:`ConfigError` for an unknown method or a count below 1."""
+    method_of(opts.method)
+    if opts.trials < 1 or opts.pf.particles < 1 or opts.smc.particles < 1:
+        raise ConfigError("--trials and --particles must be at least 1")
+
+
+def estimate_groups(
+    problems: Sequence[Problem], *, opts: EstimateOptions, rng: np.random.Generator
+) -> list[RowEstimate]:
+    """Estimates for groups given as ``(vectors (T, n, 2), demo (T, 2))`` pairs, in order."""
+    return estimator(opts.method).rows(problems, opts, rng)
+
+
+def estimate_group(
+    vectors: np.ndarray, demo: np.ndarray, *, opts: EstimateOptions, rng: np.random.Generator
+) -> RowEstimate:
+    """The estimate of one group: ``vectors (T, n, 2)``, ``demo (T, 2)``."""
+    return estimate_groups([(vectors, demo)], opts=opts, rng=rng)[0]
+
+
+def provenance(opts: EstimateOptions, *, source: str) -> dict[str, object]:
+    """The table's ``estimated_by``: method, trials, seed, source, and the method's own entries."""
+    method = method_of(opts.method)
+    by: dict[str, object] = {
+        "method": method.value,
+        "trials": opts.trials,
+        "seed": opts.seed,
+        "source": source,
+    }
+    return by | REGISTRY[method].provenance(opts)

@@ -1,0 +1,159 @@
+"""Learning from demonstration, written out once: demo(s) → fusion table, and teacher → demo.
+
+:func:`learn` is the one path from segmented demonstrations to a :class:`FusionTable` that
+``lfdfuse estimate``, the paper's experiments, the benches, the round trips and the tests call:
+each demo is read once (its ``/lfd/*`` channels, and with sub-goals its ``/scan`` and ``/pose``),
+estimated once (:func:`lfdfuse.estimate.pipeline.estimate_run`), and with ``subgoals`` the table
+is refined at the demo's decision points (:func:`lfdfuse.estimate.subgoals.refine`), which
+estimates only the new sub-segment rows. :func:`learn_run` is the same on a run in memory.
+
+:func:`demonstrate` is the other half: a teacher (a task's legs, or a fusion table driving the
+network teacher) demonstrates in a world, and the demo is segmented.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from lfdfuse.errors import ConfigError
+from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
+from lfdfuse.estimate.subgoals import refine, track_of
+from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.log.reader import read_run
+from lfdfuse.network.table import FusionTable
+from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, LandmarkTrack
+from lfdfuse.segment.pipeline import segment_file
+from lfdfuse.segment.read import SegmentedRun, read_segmented
+from lfdfuse.sim.robot import Pose
+from lfdfuse.sources.simulate import SimulateOptions, simulate
+from lfdfuse.sources.tasks import Leg
+from lfdfuse.world.model import World
+
+
+@dataclass(frozen=True)
+class LearnOptions:
+    """How demos are learned: the estimator, and whether decision points become sub-goals."""
+
+    estimate: EstimateOptions = field(default_factory=EstimateOptions)
+    subgoals: bool = False
+    decisions: DecisionParams = field(default_factory=DecisionParams)  # subgoals: what a decision is
+
+
+@dataclass(frozen=True)
+class LearnResult:
+    """The learned table and what learning measured."""
+
+    table: FusionTable
+    groups: int  # (goal segment, BAC) groups of the demo
+    skipped: int  # groups with no informative step (their BAC falls back to the default weights)
+    decisions: tuple[DecisionPoint, ...] = ()  # subgoals: the decision points found
+    sources: tuple[str, ...] = ()  # the demos, by name
+
+
+def learn_run(
+    run: SegmentedRun,
+    *,
+    options: LearnOptions = LearnOptions(),
+    track: LandmarkTrack | None = None,
+    name: str = "demo",
+    progress: Callable[[float, float], None] | None = None,
+) -> LearnResult:
+    """The table of a segmented run in memory; ``track`` (its landmark cues) is needed for sub-goals."""
+    table, groups, skipped = estimate_run(run, opts=options.estimate, name=name, progress=progress)
+    decisions: tuple[DecisionPoint, ...] = ()
+    if options.subgoals:
+        if track is None:
+            raise ConfigError("sub-goals need the demo's landmark track (its /scan and /pose)")
+        res = refine(table, run, track, opts=options.estimate, params=options.decisions)
+        table, decisions = res.table, res.decisions
+    return LearnResult(table, groups, skipped, decisions, (name,))
+
+
+def learn(
+    demos: Sequence[str | Path],
+    *,
+    options: LearnOptions = LearnOptions(),
+    progress: Callable[[float, float], None] | None = None,
+) -> LearnResult:
+    """The fusion table of segmented demo logs (today exactly one: pooling demos is to come)."""
+    if len(demos) != 1:
+        raise ConfigError(f"learning takes one demonstration for now (got {len(demos)})")
+    src = demos[0]
+    run = read_segmented(src)
+    name = Path(src).name
+    track = track_of(read_run(src), run, source=str(src)) if options.subgoals else None
+    return learn_run(run, options=options, track=track, name=name, progress=progress)
+
+
+# ------------------------------------------------------------------------------ demonstrate
+
+
+@dataclass(frozen=True)
+class Demonstration:
+    """A demonstration on disk: the raw log, the segmented one, how long it ran."""
+
+    raw: Path
+    segmented: Path
+    steps: int  # simulation steps
+    duration_s: float  # simulated time
+    wall_s: float  # wall time to drive it (segmenting not counted)
+
+
+def demonstrate(
+    teacher: Sequence[Leg] | FusionTable,
+    *,
+    world: World,
+    folder: Path,
+    name: str,
+    duration_s: float,
+    seed: int,
+    teacher_name: str = "task",
+    heading_noise_rad: float = 0.0,
+    start: tuple[float, float, float] | None = None,
+    behaviors: str | None = None,
+    measure_lag: bool = True,
+) -> Demonstration:
+    """Demonstrate in ``world`` and segment: ``folder/name.mcap`` and ``folder/name.seg.mcap``
+    (``folder`` is created).
+
+    ``teacher`` is a task's legs (the scripted style teacher, ``simulate --teacher``, named
+    ``teacher_name`` in the log) or a fusion table (the network teacher, ``simulate --teacher
+    TABLE``, with ``heading_noise_rad``). ``behaviors`` (default: the segment preset, or the
+    table's behaviours) and ``measure_lag`` are ``segment``'s.
+    """
+    folder.mkdir(parents=True, exist_ok=True)
+    raw, seg = folder / f"{name}.mcap", folder / f"{name}.seg.mcap"
+    pose = None if start is None else Pose(*start)
+    t0 = time.perf_counter()
+    if isinstance(teacher, FusionTable):
+        opts = ExecuteOptions(
+            world=world,
+            table=teacher,
+            start=pose,
+            max_time_s=duration_s,
+            seed=seed,
+            heading_noise_rad=heading_noise_rad,
+        )
+        summary = drive_table(opts, out=raw, command="simulate", teacher=True).summary
+        behaviors = behaviors or ",".join(teacher.behaviors)
+    else:
+        summary = simulate(
+            SimulateOptions(
+                world=world,
+                legs=list(teacher),
+                teacher_name=teacher_name,
+                duration_s=duration_s,
+                seed=seed,
+                start=pose,
+            ),
+            out=raw,
+        )
+    wall = time.perf_counter() - t0
+    if behaviors is None:
+        segment_file(raw, out=seg, measure_lag=measure_lag)
+    else:
+        segment_file(raw, out=seg, behaviors=behaviors, measure_lag=measure_lag)
+    return Demonstration(raw, seg, summary.steps, summary.duration_s, wall)
