@@ -444,16 +444,6 @@ def encode_step(
     return NetworkStep(t_ns, step, goal, bac, default_weights, tuple(achieved)).encode()
 
 
-def decode_step(msg: dict[str, Any]) -> tuple[str | None, int, bool]:
-    """``(active step or None, bac, default weights used)`` of a parsed message.
-
-    Kept only for ``viz/experiments.py`` until it moves out of ``viz/``; new readers call
-    :meth:`NetworkStep.decode` on the message bytes.
-    """
-    s = NetworkStep.from_dict(msg)
-    return s.step, s.bac, s.default_weights
-
-
 @dataclass(frozen=True)
 class FusedVector(_Codec):
     """``lfdfuse.FusedVector``: the fused robot-frame vector and the weights that made it

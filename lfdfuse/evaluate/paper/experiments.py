@@ -11,7 +11,6 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-import orjson
 
 from lfdfuse import learn
 from lfdfuse.estimate.pipeline import EstimateOptions
@@ -129,4 +128,4 @@ def execute(
 
 def step_of_ticks(log: Path) -> list[str | None]:
     """The active network step of every tick of a run log (``/lfd/step``, one per tick)."""
-    return [lfd.decode_step(orjson.loads(data))[0] for *_, data in iter_messages(log, topics=["/lfd/step"])]
+    return [lfd.NetworkStep.decode(data).step for *_, data in iter_messages(log, topics=["/lfd/step"])]
