@@ -13,23 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from lfdfuse.network.table import FusionTable, Step
+from lfdfuse.network.table import FusionTable, Step, leaf_steps
 from lfdfuse.segment.read import SegmentedRun
-
-
-def leaf_steps(table: FusionTable) -> list[Step]:
-    """The fusion steps of a (nested) network, depth first: the order of the goal segments."""
-    out: list[Step] = []
-
-    def walk(steps: tuple[Step, ...]) -> None:
-        for s in steps:
-            if s.network is not None:
-                walk(s.network.steps)
-            else:
-                out.append(s)
-
-    walk(table.network.steps)
-    return out
 
 
 def runtime_weights(table: FusionTable, step: Step | None, bac: int) -> dict[str, float]:

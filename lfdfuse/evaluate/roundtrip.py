@@ -17,8 +17,8 @@ import numpy as np
 
 from lfdfuse import learn
 from lfdfuse.estimate.baselines import angle_errors, heading_fit_weights
-from lfdfuse.estimate.replay import fused_vectors, leaf_steps, runtime_weights
-from lfdfuse.network.table import FusionTable, Step, load_table
+from lfdfuse.estimate.replay import fused_vectors, runtime_weights
+from lfdfuse.network.table import FusionTable, Step, leaf_steps, load_table
 from lfdfuse.segment.read import SegmentedRun, read_segmented
 from lfdfuse.world.model import load_world
 

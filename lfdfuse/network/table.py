@@ -313,3 +313,38 @@ def dump_table(t: FusionTable) -> str:
 def write_table(t: FusionTable, path: str | Path) -> None:
     """Write atomically: a temp file in the same folder, then rename."""
     write_text_atomic(path, dump_table(t))
+
+
+@dataclass(frozen=True)
+class StepRows:
+    """One fusion primitive of a table: its name (nested steps as ``outer/inner``), goal and rows."""
+
+    name: str
+    goal: str | None
+    rows: tuple[FusionRow, ...]
+
+
+def named_leaf_steps(table: FusionTable) -> list[tuple[str, Step]]:
+    """The fusion steps of a (nested) network, depth first (the order of the goal segments), each
+    with its name (a nested network's steps as ``outer/inner``)."""
+    out: list[tuple[str, Step]] = []
+
+    def walk(net: Network, prefix: str) -> None:
+        for s in net.steps:
+            if s.network is not None:
+                walk(s.network, f"{prefix}{s.name}/")
+            else:
+                out.append((f"{prefix}{s.name}", s))
+
+    walk(table.network, "")
+    return out
+
+
+def leaf_steps(table: FusionTable) -> list[Step]:
+    """The fusion steps of a (nested) network, depth first: the order of the goal segments."""
+    return [s for _, s in named_leaf_steps(table)]
+
+
+def table_steps(table: FusionTable) -> list[StepRows]:
+    """Every fusion primitive of a table with its rows, depth first."""
+    return [StepRows(name, s.goal, s.fusion) for name, s in named_leaf_steps(table)]

@@ -16,8 +16,9 @@ from matplotlib.collections import LineCollection
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch, Polygon
 
+from lfdfuse.evaluate.views import PathData
+from lfdfuse.network.table import StepRows
 from lfdfuse.viz import colors
-from lfdfuse.viz.load import PathData, StepRows
 from lfdfuse.world.model import World
 
 LEFT_COLOR = "#0072B2"

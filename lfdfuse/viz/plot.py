@@ -15,10 +15,10 @@ import matplotlib
 from matplotlib.figure import Figure
 
 from lfdfuse.errors import ConfigError, LfdError
+from lfdfuse.evaluate.views import PathData, load_log
 from lfdfuse.files import write_bytes_atomic
-from lfdfuse.network.table import FusionTable, load_table
+from lfdfuse.network.table import FusionTable, load_table, table_steps
 from lfdfuse.viz import figures
-from lfdfuse.viz.load import PathData, load_log, table_steps
 
 FORMATS = ("png", "svg")
 DPI = 100

@@ -14,8 +14,9 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from lfdfuse.evaluate.paper.records import STYLES, PaperResults, passing_sides, task_order
+from lfdfuse.evaluate.views import load_log
+from lfdfuse.network.table import table_steps
 from lfdfuse.viz import colors, figures
-from lfdfuse.viz.load import load_log, table_steps
 from lfdfuse.viz.plot import DPI, map_figure, table_figure
 from lfdfuse.world.model import load_world
 

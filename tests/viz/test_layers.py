@@ -86,8 +86,5 @@ def test_viz_imports_no_stage() -> None:
     for m, deps in graph.items():
         if not m.startswith("lfdfuse.viz"):
             continue
-        if m == "lfdfuse.viz.load":
-            # the codecs side of issue 18 moves its segmented-log reading below viz
-            continue
         bad = sorted(d for d in deps if d.startswith(STAGES))
         assert not bad, f"{m} imports {bad}"

@@ -16,6 +16,7 @@ from typer.testing import CliRunner
 
 from lfdfuse.cli.main import app
 from lfdfuse.estimate.pipeline import EstimateOptions
+from lfdfuse.evaluate.views import load_log
 from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.learn import LearnOptions, demonstrate, learn
 from lfdfuse.log import lfd
@@ -23,7 +24,6 @@ from lfdfuse.log.messages import TOPICS
 from lfdfuse.network.table import write_table
 from lfdfuse.sources.tasks import Leg
 from lfdfuse.viz import colors
-from lfdfuse.viz.load import load_log
 from lfdfuse.viz.plot import map_figure, save_figure
 from lfdfuse.world.model import load_world
 from tests.conftest import ROOT

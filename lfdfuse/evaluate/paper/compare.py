@@ -17,7 +17,7 @@ import numpy as np
 
 from lfdfuse.evaluate.paper.experiments import step_of_ticks
 from lfdfuse.evaluate.paper.records import Learned, PaperResults, Run, passing_sides, task_order
-from lfdfuse.network.table import FusionRow, FusionTable, Network
+from lfdfuse.network.table import FusionTable, table_steps
 from lfdfuse.segment.read import read_segmented
 from lfdfuse.world.model import load_world
 
@@ -112,26 +112,6 @@ def style_errors(
         got = corridor_sides(np.concatenate(rl), np.concatenate(rr))
         out.append((f"task\n{step}", got[0] - demo[0], got[1] - demo[1]))
     return out
-
-
-@dataclass(frozen=True)
-class _StepRows:
-    name: str  # nested steps as ``outer/inner``
-    goal: str | None
-    rows: tuple[FusionRow, ...]
-
-
-def table_steps(table: FusionTable) -> list[_StepRows]:
-    """Every fusion primitive of a table, depth first (a nested network's steps in its place)."""
-
-    def walk(net: Network, prefix: str) -> Iterator[_StepRows]:
-        for s in net.steps:
-            if s.network is not None:
-                yield from walk(s.network, f"{prefix}{s.name}/")
-            else:
-                yield _StepRows(f"{prefix}{s.name}", s.goal, s.fusion)
-
-    return list(walk(table.network, ""))
 
 
 def weight_stats(table: FusionTable) -> dict[str, Any]:

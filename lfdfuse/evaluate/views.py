@@ -1,4 +1,5 @@
-"""Files into plot data, through the readers of :mod:`lfdfuse.log` and :mod:`lfdfuse.segment`.
+"""What a plot shows of a file: logs decoded into plot data, through the readers of
+:mod:`lfdfuse.log` and :mod:`lfdfuse.segment` (below :mod:`lfdfuse.viz`, which only draws).
 
 A demo, segmented or run MCAP becomes a :class:`PathData` (the map, the path on the clock of
 the laser scans, what part of the task each tick belongs to, BAC changes, goals reached and
@@ -8,7 +9,6 @@ here draws: the figures take these dataclasses.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -20,7 +20,6 @@ from lfdfuse.errors import LfdError, LogError
 from lfdfuse.files import parse_yaml
 from lfdfuse.log import lfd
 from lfdfuse.log.reader import file_info, hold, iter_messages, read_run
-from lfdfuse.network.table import FusionRow, FusionTable, Network
 from lfdfuse.segment.read import read_segmented
 from lfdfuse.sim.robot import RobotParams
 from lfdfuse.world.model import World, builtin_names, load_world, parse_world
@@ -213,28 +212,3 @@ def _run(
         goals.append(GoalMark(g, float(pose[i, 0]), float(pose[i, 1]), float(t_s[i])))
     bac = np.array(bacs, dtype=np.int64)[at]
     return PathData("run", src, world, t_s, pose, part, names, bac, tuple(goals), hits, meta)
-
-
-# ------------------------------------------------------------------------------ tables
-
-
-@dataclass(frozen=True)
-class StepRows:
-    """One fusion primitive of a table: its name (nested steps as ``outer/inner``), goal and rows."""
-
-    name: str
-    goal: str | None
-    rows: tuple[FusionRow, ...]
-
-
-def table_steps(table: FusionTable) -> list[StepRows]:
-    """Every fusion primitive of a table, depth first (a nested network's steps in its place)."""
-
-    def walk(net: Network, prefix: str) -> Iterator[StepRows]:
-        for s in net.steps:
-            if s.network is not None:
-                yield from walk(s.network, f"{prefix}{s.name}/")
-            else:
-                yield StepRows(f"{prefix}{s.name}", s.goal, s.fusion)
-
-    return list(walk(table.network, ""))
