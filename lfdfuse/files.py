@@ -9,6 +9,7 @@ from __future__ import annotations
 import os
 import stat
 import tempfile
+from enum import Enum
 from pathlib import Path
 from typing import Any
 
@@ -145,3 +146,35 @@ def read_text(path: str | Path, *, what: str, error: type[LfdError] = ConfigErro
 def read_yaml(path: str | Path, *, what: str, error: type[LfdError] = ConfigError) -> Any:
     """Read and parse a YAML file; ``what`` names it in errors ("task file", "fusion table")."""
     return parse_yaml(read_text(path, what=what, error=error), origin=str(path), error=error)
+
+
+class YamlKind(Enum):
+    """Which of lfdfuse's YAML files a document is, told by its top level."""
+
+    #: a fusion table: a mapping with ``format:`` (``lfdfuse/fusion-table@1``)
+    TABLE = "fusion table"
+    #: a task: a mapping with ``task:`` (a list of ``{target, style}`` legs)
+    TASK = "task"
+    #: a world: any other mapping (``walls``, ``obstacles``, ``targets``, ``start``…)
+    WORLD = "world"
+
+
+def kind_of(data: object) -> YamlKind | None:
+    """The kind of a parsed YAML document, or None when it is not a mapping (none of ours).
+
+    Only the top-level keys are looked at; the kind's own loader checks the rest.
+
+    >>> kind_of({"format": "lfdfuse/fusion-table@1", "behaviors": []})
+    <YamlKind.TABLE: 'fusion table'>
+    >>> kind_of({"task": [{"target": "red", "style": "keep-left"}]})
+    <YamlKind.TASK: 'task'>
+    >>> kind_of({"walls": []}), kind_of({}), kind_of([1, 2]), kind_of(None)
+    (<YamlKind.WORLD: 'world'>, <YamlKind.WORLD: 'world'>, None, None)
+    """
+    if not isinstance(data, dict):
+        return None
+    if "format" in data:
+        return YamlKind.TABLE
+    if "task" in data:
+        return YamlKind.TASK
+    return YamlKind.WORLD

@@ -9,7 +9,7 @@ import typer
 from rich.table import Table
 
 from lfdfuse.cli.app import app
-from lfdfuse.cli.common import console, progress_bar, user_errors
+from lfdfuse.cli.common import console, progress_bar, seed_option, user_errors
 from lfdfuse.evaluate.holdout import METHODS, evaluate, reading
 from lfdfuse.files import write_text_atomic
 from lfdfuse.segment.read import read_segmented
@@ -28,8 +28,10 @@ _WHAT = {
 @user_errors
 def evaluate_cmd(
     src: Path = typer.Argument(..., help="A segmented demo (from `lfdfuse segment`)."),
-    holdout: float = typer.Option(0.3, "--holdout", help="Fraction of the log (its last part) held out."),
-    seed: int = typer.Option(0, "--seed", min=0, help="Seed of the estimator and the bootstrap."),
+    holdout: float = typer.Option(
+        0.3, "--holdout", help="Fraction of the log (its last part) held out, between 0 and 1."
+    ),
+    seed: int = seed_option("Seed of the estimator and the bootstrap."),
     json_out: Path | None = typer.Option(None, "--json", help="Write the scores as JSON here."),
 ) -> None:
     """Fit on the first part of a demo, predict the demonstrated heading on the rest.

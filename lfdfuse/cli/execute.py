@@ -8,12 +8,12 @@ import typer
 
 from lfdfuse.cli.app import WORLD_HELP, app
 from lfdfuse.cli.common import (
-    check_amount,
-    check_duration,
     check_outputs,
-    check_seed,
+    duration_option,
     existing,
     progress_bar,
+    seed_option,
+    sensor_noise_option,
     user_errors,
 )
 from lfdfuse.cli.render import print_report
@@ -34,11 +34,9 @@ def execute_cmd(
     start: str | None = typer.Option(
         None, "--start", help="Start pose X,Y,THETA (m, m, rad); default: the world's."
     ),
-    max_time: float = typer.Option(300.0, "--max-time", help="Stop after this many simulated seconds."),
-    seed: int = typer.Option(0, "--seed", help="Seed of every random draw (sensor noise)."),
-    noise: float = typer.Option(
-        0.0, "--sensor-noise", help="Std (m) of Gaussian range noise on laser and sonar."
-    ),
+    max_time: float = duration_option(300.0, "--max-time", help="Stop after this many simulated seconds."),
+    seed: int = seed_option("Seed of every random draw (sensor noise)."),
+    noise: float = sensor_noise_option(),
     stop_on_collision: bool = typer.Option(
         False, "--stop-on-collision", help="End the run at the first collision."
     ),
@@ -55,9 +53,6 @@ def execute_cmd(
       lfdfuse execute fusion.yaml --world building -o run.mcap --report run.json
       lfdfuse execute fusion.yaml --world tee --start 1,9,0 --max-time 120
     """
-    check_duration("--max-time", max_time)
-    check_seed(seed)
-    check_amount("--sensor-noise", noise, maximum=1.0, unit="m")
     check_outputs([out, report], [table, existing(world)])
     w = load_world(world)
     tab = load_table(table)

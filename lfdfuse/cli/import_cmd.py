@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from enum import StrEnum
 from pathlib import Path
 
 import typer
@@ -10,10 +11,37 @@ from rich.console import Console
 
 from lfdfuse.cli.app import app
 from lfdfuse.cli.common import console, user_errors
-from lfdfuse.sources.importers import FORMATS
 from lfdfuse.sources.importers.convert import CmdFrom, ImportOptions, ImportSummary, import_log
 from lfdfuse.sources.importers.goals import read_goals
 from lfdfuse.sources.importers.records import Mount, TopicChoice
+
+
+class Format(StrEnum):
+    """``--format``: the importers of :data:`lfdfuse.sources.importers.FORMATS` (a test keeps
+    the two the same)."""
+
+    ROS1 = "ros1"
+    ROS2 = "ros2"
+    CARMEN = "carmen"
+    BREEZYSLAM = "breezyslam"
+
+
+class CmdSource(StrEnum):
+    """``--cmd-from``: where the demo's commands come from (:data:`CmdFrom`)."""
+
+    AUTO = "auto"
+    CMD = "cmd"
+    ODOM = "odom"
+
+
+class Driver(StrEnum):
+    """``--teacher``: who drove, for provenance."""
+
+    HUMAN = "human"
+    UNKNOWN = "unknown"
+
+
+_CMD_FROM: dict[CmdSource, CmdFrom] = {CmdSource.AUTO: "auto", CmdSource.CMD: "cmd", CmdSource.ODOM: "odom"}
 
 
 def parse_mount(text: str) -> Mount:
@@ -44,9 +72,7 @@ def import_cmd(
     out: Path | None = typer.Option(
         None, "--out", "-o", help="Output demo MCAP (default: NAME.demo.mcap here)."
     ),
-    fmt: str | None = typer.Option(
-        None, "--format", "-f", help=f"Source format ({', '.join(FORMATS)}); default: detected."
-    ),
+    fmt: Format | None = typer.Option(None, "--format", "-f", help="Source format; default: detected."),
     scan: str | None = typer.Option(
         None, "--scan", help="Laser scan topic (default: /scan or the busiest one)."
     ),
@@ -54,8 +80,8 @@ def import_cmd(
         None, "--cmd", help="Velocity command topic (default: /cmd_vel or the busiest)."
     ),
     odom: str | None = typer.Option(None, "--odom", help="Odometry topic (default: /odom or the busiest)."),
-    cmd_from: str = typer.Option(
-        "auto",
+    cmd_from: CmdSource = typer.Option(
+        CmdSource.AUTO,
         "--cmd-from",
         help="cmd: the recorded commands; odom: commands derived from odometry; auto: cmd when the log has any.",
     ),
@@ -71,7 +97,7 @@ def import_cmd(
     omega_max: float | None = typer.Option(
         None, "--omega-max", help="Robot turn-rate limit (rad/s); default: from the log."
     ),
-    teacher: str = typer.Option("unknown", "--teacher", help="Who drove: human or unknown (provenance)."),
+    teacher: Driver = typer.Option(Driver.UNKNOWN, "--teacher", help="Who drove (provenance)."),
 ) -> None:
     """Turn a real robot log into an lfdfuse demo: /scan, /cmd_vel, /pose and provenance.
 
@@ -86,19 +112,14 @@ def import_cmd(
       lfdfuse import intel-corrected.log.gz -o intel.mcap
       lfdfuse import run.bag --scan /base_scan --cmd-from odom --goals goals.yaml -o demo.mcap
     """
-    if cmd_from not in ("auto", "cmd", "odom"):
-        raise typer.BadParameter("--cmd-from must be cmd, odom or auto")
-    if teacher not in ("human", "unknown"):
-        raise typer.BadParameter("--teacher must be human or unknown")
-    mode: CmdFrom = "cmd" if cmd_from == "cmd" else "odom" if cmd_from == "odom" else "auto"
     opts = ImportOptions(
-        fmt=fmt,
+        fmt=None if fmt is None else fmt.value,
         topics=TopicChoice(scan, cmd, odom),
-        cmd_from=mode,
+        cmd_from=_CMD_FROM[cmd_from],
         mount=parse_mount(laser_mount) if laser_mount else None,
         v_max_mps=v_max,
         omega_max_rps=omega_max,
-        teacher="human" if teacher == "human" else "unknown",
+        teacher="human" if teacher is Driver.HUMAN else "unknown",
         goals=read_goals(goals) if goals else (),
     )
     summary = import_log(source, out=out or default_out(source), options=opts)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import typer
 from rich.table import Table
 
@@ -12,12 +11,13 @@ from lfdfuse.cli.app import app
 from lfdfuse.cli.common import console, user_errors
 from lfdfuse.cli.render import print_segments, print_subgoals, print_table
 from lfdfuse.errors import ConfigError
-from lfdfuse.files import read_yaml
+from lfdfuse.files import YamlKind, kind_of, read_yaml
 from lfdfuse.log.messages import PROVENANCE
 from lfdfuse.log.reader import file_info
-from lfdfuse.network.table import load_table
+from lfdfuse.network.table import parse_table
+from lfdfuse.segment.pipeline import step_s_of
 from lfdfuse.segment.read import read_segmented, segmentation_of
-from lfdfuse.sources.tasks import load_task
+from lfdfuse.sources.tasks import parse_task
 from lfdfuse.world.model import load_world
 
 
@@ -65,9 +65,8 @@ def inspect(
         console.print(f"  attachments: {', '.join(_short(a, 40) for a in info.attachments)}")
     if "/lfd/segment" in info.channels and "/lfd/behaviors" in info.channels:
         seg = read_segmented(file)
-        dt = float(np.median(np.diff(seg.t_ns))) / 1e9 if len(seg.t_ns) > 1 else 0.1
         console.print(f"  segmented with: {', '.join(seg.names)}")
-        print_segments(segmentation_of(seg), seg.names, dt)
+        print_segments(segmentation_of(seg), seg.names, step_s_of(seg.t_ns))
 
 
 def _short(value: object, width: int = 60) -> str:
@@ -78,21 +77,22 @@ def _short(value: object, width: int = 60) -> str:
 
 def _inspect_yaml(file: Path) -> None:
     data = read_yaml(file, what="file")
-    if isinstance(data, dict) and "format" in data:
-        table = load_table(file)
+    kind = kind_of(data)
+    if kind is YamlKind.TABLE:
+        table = parse_table(data)
         console.print(f"[bold]{file}[/bold]  fusion table, {len(table.behaviors)} behaviours")
         print_table(table)
         if any(s.network is not None for s in table.network.steps):
             print_subgoals(table)  # sub-goals at decision points, in words (issue 15)
-    elif isinstance(data, dict) and set(data) == {"task"}:
-        legs = load_task(str(file))
+    elif kind is YamlKind.TASK:
+        legs = parse_task(data, origin=str(file))
         console.print(f"[bold]{file}[/bold]  task of {len(legs)} leg(s)")
         for i, leg in enumerate(legs):
             console.print(
                 f"  {i + 1}. {'reach ' + leg.target if leg.target else 'tour'} in style {leg.style}"
             )
-    elif isinstance(data, dict):
-        w = load_world(str(file))
+    elif kind is YamlKind.WORLD:
+        w = load_world(str(file))  # a map_server map YAML too (it reads its image)
         x0, y0, x1, y1 = w.bounds()
         console.print(f"[bold]{file}[/bold]  world {w.name!r}: {x1 - x0:.1f} m x {y1 - y0:.1f} m")
         console.print(

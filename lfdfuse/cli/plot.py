@@ -2,12 +2,22 @@
 
 from __future__ import annotations
 
+from enum import StrEnum
 from pathlib import Path
 
 import typer
 
 from lfdfuse.cli.app import app
 from lfdfuse.cli.common import console, user_errors
+
+
+class Whiskers(StrEnum):
+    """``--whiskers``: the spread a fusion table's weight bars show."""
+
+    #: the posterior std of each weight
+    STD = "std"
+    #: the spread over ``estimate --trials K``
+    TRIAL_STD = "trial_std"
 
 
 @app.command("plot")
@@ -17,8 +27,8 @@ def plot_cmd(
         ..., help="A demo, segmented or run MCAP (drawn on its map), or a fusion table YAML (weight bars)."
     ),
     out: Path = typer.Option(..., "--out", "-o", help="The figure: PATH.png or PATH.svg."),
-    whiskers: str = typer.Option(
-        "std",
+    whiskers: Whiskers = typer.Option(
+        Whiskers.STD,
         "--whiskers",
         help="Fusion tables: std (posterior std) or trial_std (spread over --trials K).",
     ),
@@ -38,6 +48,6 @@ def plot_cmd(
     """
     from lfdfuse.viz.plot import plot_file  # matplotlib only when plotting: `lfdfuse --help` stays fast
 
-    res = plot_file(src, out, title=title, spread=whiskers)
+    res = plot_file(src, out, title=title, spread=whiskers.value)
     console.print(f"[bold]plot[/bold] {src} → {res.out}  ({res.width_px}×{res.height_px} px)")
     console.print(f"  {res.summary}")

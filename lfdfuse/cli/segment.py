@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import typer
 
 from lfdfuse.behaviors.primitives import DEFAULT_PRESET, PRESETS
@@ -47,20 +46,15 @@ def segment_cmd(
         res = segment_file(src, out=target, behaviors=behaviors, lag_s=lag)
     console.print(f"[bold]segment[/bold] {src} → {res.out}")
     console.print(f"  behaviours: {', '.join(res.names)}")
-    dt = 0.1
-    if len(res.t_ns) > 1:
-        dt = float(np.median(np.diff(res.t_ns))) / 1e9
     still = int((~res.informative).sum())
     console.print(
         f"  {len(res.t_ns)} steps, {still} without heading information (standing still or reversing)"
     )
-    fits = [f for f in res.lag_fits if f.steps > 0]
-    if fits:
-        best = min(fits, key=lambda f: f.heading_error_deg)
-        here = next((f for f in fits if abs(f.lag_s - res.lag_s) < 1e-9), None)
+    best, here = res.best_lag, res.fit_at_lag
+    if best is not None:
         now = f", {here.heading_error_deg:.1f}° at --lag {res.lag_s:g}" if here is not None else ""
         console.print(
             f"  command lag: {best.lag_s:+.1f} s explains the demo best "
             f"(per-BAC least-squares heading error {best.heading_error_deg:.1f}°{now})"
         )
-    print_segments(res.segmentation, res.names, dt)
+    print_segments(res.segmentation, res.names, res.step_s)

@@ -14,6 +14,7 @@ import termios
 from collections import deque
 from collections.abc import Iterator
 from contextlib import contextmanager, nullcontext
+from enum import StrEnum
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -26,7 +27,7 @@ from rich.panel import Panel
 from rich.text import Text
 
 from lfdfuse.cli.app import WORLD_HELP, app
-from lfdfuse.cli.common import console, user_errors
+from lfdfuse.cli.common import console, duration_option, finite, seed_option, user_errors
 from lfdfuse.cli.render import print_run
 from lfdfuse.errors import ConfigError
 from lfdfuse.sim.robot import Pose
@@ -45,7 +46,18 @@ from lfdfuse.sources.teleop.session import (
 from lfdfuse.sources.teleop.view import ARROWS, LASER, TRAIL, WALL, render_map
 from lfdfuse.world.model import DEFAULT_WORLD, World, load_world
 
-INPUTS = ("keyboard", "foxglove", "script")
+
+class InputKind(StrEnum):
+    """``--input``: who drives."""
+
+    #: this terminal's keys
+    KEYBOARD = "keyboard"
+    #: a Foxglove client's Teleop panel over WebSocket
+    FOXGLOVE = "foxglove"
+    #: timed inputs from ``--script``, faster than real time
+    SCRIPT = "script"
+
+
 LAYOUT = "foxglove/teleop-layout.json"
 
 
@@ -53,26 +65,32 @@ LAYOUT = "foxglove/teleop-layout.json"
 @user_errors
 def teleop_cmd(
     world: str = typer.Option(DEFAULT_WORLD, "--world", "-w", help=WORLD_HELP),
-    input_: str = typer.Option(
-        "keyboard",
+    input_: InputKind = typer.Option(
+        InputKind.KEYBOARD,
         "--input",
         "-i",
         help="keyboard (this terminal), foxglove (a Foxglove client's Teleop panel), or script (--script).",
     ),
-    port: int = typer.Option(8765, "--port", help="Foxglove WebSocket port (0: any free port)."),
+    port: int = typer.Option(
+        8765, "--port", min=0, max=65535, help="Foxglove WebSocket port (0: any free port)."
+    ),
     host: str = typer.Option(
         "127.0.0.1", "--host", help="Foxglove server address (0.0.0.0: all interfaces)."
     ),
     script: Path | None = typer.Option(
         None, "--script", help="Timed inputs (YAML or CSV) for --input script; runs faster than real time."
     ),
-    duration: float | None = typer.Option(
+    duration: float | None = duration_option(
         None, "--duration", "-d", help="Stop after this many seconds of wall-clock time (default: no limit)."
     ),
     timeout: float = typer.Option(
-        2.5, "--timeout", help="Foxglove: stop the robot when no client command came for this many seconds."
+        2.5,
+        "--timeout",
+        min=0.1,  # one control period: a shorter timeout would stop every command
+        callback=finite,
+        help="Foxglove: stop the robot when no client command came for this many seconds.",
     ),
-    seed: int = typer.Option(0, "--seed", help="Seed of every random draw (sensor noise)."),
+    seed: int = seed_option("Seed of every random draw (sensor noise)."),
     start: str | None = typer.Option(
         None, "--start", help="Start pose X,Y,THETA (m, m, rad); default: the world's."
     ),
@@ -96,31 +114,25 @@ def teleop_cmd(
       lfdfuse teleop --input foxglove --port 8765 --duration 600 -o mine.mcap
       lfdfuse teleop --input script --script drive.yaml -o scripted.mcap
     """
-    if input_ not in INPUTS:
-        raise ConfigError(f"--input must be one of {', '.join(INPUTS)}, got {input_!r}")
-    if (input_ == "script") != (script is not None):
+    if (input_ is InputKind.SCRIPT) != (script is not None):
         raise ConfigError("--script FILE goes with --input script (and only with it)")
-    if not 0 <= port <= 65535:
-        raise ConfigError(f"--port must be 0..65535, got {port}")
-    if not timeout > 0:
-        raise ConfigError("--timeout must be positive")
     w = load_world(world)
     pose = Pose.parse(start) if start else None
     opts = TeleopOptions(
         world=w,
-        input_name=input_ if script is None else f"script:{script.name}",
+        input_name=input_.value if script is None else f"script:{script.name}",
         seed=seed,
         start=pose,
         duration_s=duration,
-        twist_timeout_s=timeout if input_ == "foxglove" else None,
+        twist_timeout_s=timeout if input_ is InputKind.FOXGLOVE else None,
     )
     laser = opts.sensors.laser.geometry
-    if input_ == "script":
+    if input_ is InputKind.SCRIPT:
         assert script is not None
         session = make_session(opts, inputs=[ScriptInput(load_script(script))], clock=SimClock())
         with stop_on_signals(session):
             summary = teleop(opts, session=session, out=out)
-    elif input_ == "foxglove":
+    elif input_ is InputKind.FOXGLOVE:
         from lfdfuse.sources.teleop.foxglove_server import FoxgloveLive
 
         with FoxgloveLive(world=w, sensors=opts.sensors, host=host, port=port) as live:

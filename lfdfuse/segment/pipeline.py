@@ -32,6 +32,7 @@ from lfdfuse.log.writer import LogWriter
 from lfdfuse.segment.demo import demonstrated, lag_ns_of, observations_of
 from lfdfuse.segment.goals import Segmentation, segment_outputs
 from lfdfuse.segment.lag import LagFit, lag_fits
+from lfdfuse.sim.robot import RobotParams
 from lfdfuse.sources.importers import require_lfdfuse_log
 
 
@@ -44,6 +45,37 @@ class SegmentResult:
     out: str
     lag_s: float = 0.0
     lag_fits: tuple[LagFit, ...] = ()  # fit error per candidate lag (empty when not measured)
+
+    @property
+    def step_s(self) -> float:
+        """The demo's control period (s): see :func:`step_s_of`."""
+        return step_s_of(self.t_ns)
+
+    @property
+    def best_lag(self) -> LagFit | None:
+        """The candidate lag whose fits explain the demo best (smallest heading error; the
+        shorter lag on a tie), or None when no lag was measured or none had informative steps."""
+        fits = [f for f in self.lag_fits if f.steps > 0]
+        return min(fits, key=lambda f: f.heading_error_deg) if fits else None
+
+    @property
+    def fit_at_lag(self) -> LagFit | None:
+        """The fit at the lag this segmentation used, when that lag was among the candidates."""
+        return next((f for f in self.lag_fits if f.steps > 0 and abs(f.lag_s - self.lag_s) < 1e-9), None)
+
+
+def step_s_of(t_ns: np.ndarray) -> float:
+    """The control period (s) of steps stamped ``t_ns`` (N,): the median gap between them, or
+    the simulated robot's period when there are fewer than two steps.
+
+    >>> step_s_of(np.array([0, 100_000_000, 200_000_000, 350_000_000]))
+    0.1
+    >>> step_s_of(np.array([], dtype=np.int64)) == RobotParams().dt_s
+    True
+    """
+    if len(t_ns) < 2:
+        return RobotParams().dt_s
+    return float(np.median(np.diff(t_ns))) / 1e9
 
 
 def segment_file(

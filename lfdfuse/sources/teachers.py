@@ -12,17 +12,19 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from lfdfuse.control.drive import DriveParams, heading_to_command
 from lfdfuse.control.safety import SafetyParams, free_heading
+from lfdfuse.files import YamlKind, kind_of, read_yaml
 from lfdfuse.sim.robot import Pose, wrap_angle
 from lfdfuse.sim.sensors import CameraParams, Reading, ScanGeometry, target_reached
 from lfdfuse.sim.simulator import Observation
 from lfdfuse.sources.planner import Planner
-from lfdfuse.sources.tasks import Leg
+from lfdfuse.sources.tasks import Leg, parse_style, parse_task
 from lfdfuse.world.model import World
 
 
@@ -54,6 +56,61 @@ def side_range(
     if not sel.any():
         return geom.max_range_m
     return float(ranges[sel].min())
+
+
+# --- what ``--teacher`` names ----------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ScriptedTeacher:
+    """A style teacher over a chain of legs: a built-in style tours, a task reaches its targets."""
+
+    legs: tuple[Leg, ...]
+    #: how provenance and the summary name it: the style, or the task file's name
+    name: str
+
+
+@dataclass(frozen=True)
+class NetworkTeacher:
+    """A fusion table driving as the teacher (a known ground truth for round trips).
+
+    Running a network is a later stage (``execute``); this names the table and carries its
+    parsed YAML (for :func:`lfdfuse.network.table.parse_table`), read once.
+    """
+
+    path: Path
+    data: Any
+    name: str
+
+
+TeacherSpec = ScriptedTeacher | NetworkTeacher
+
+
+def _is_file(spec: str) -> bool:
+    try:
+        return Path(spec).exists()
+    except OSError:  # a name too long for the file system: not a file, so a style name
+        return False
+
+
+def teacher_from(spec: str, world: World) -> TeacherSpec:
+    """What a ``--teacher`` spec names: a built-in style (see ``STYLES``), a task YAML or a
+    fusion table YAML (told apart by :func:`lfdfuse.files.kind_of`).
+
+    A task's targets must be in ``world``; anything else wrong is one :class:`ConfigError`
+    (or :class:`WorldError`) before a run starts.
+    """
+    if not (spec.endswith((".yaml", ".yml")) or _is_file(spec)):
+        return ScriptedTeacher((Leg(None, parse_style(spec)),), spec)
+    data = read_yaml(spec, what="teacher file")
+    name = Path(spec).name
+    if kind_of(data) is YamlKind.TABLE:
+        return NetworkTeacher(Path(spec), data, name)
+    legs = tuple(parse_task(data, origin=spec))  # a world or anything else: the task's own error
+    for leg in legs:
+        if leg.target is not None:
+            world.target(leg.target)
+    return ScriptedTeacher(legs, name)
 
 
 #: a wall-follower that travelled less than STUCK_M in STUCK_TICKS ticks tours by the planner

@@ -24,6 +24,9 @@ from tests.hostile.runner import Case
 OK_OR_ERROR = frozenset({0, 1})
 ERROR = frozenset({1})
 USAGE = frozenset({2})
+#: a bad choice of estimate's (--method, --likelihood): exit 2 once its enums land (issue 18,
+#: cli/estimate.py is the learn path's); 1 before
+CHOICE = frozenset({1, 2})
 INTERRUPTED = frozenset({130, 143})
 AS_ROOT = os.geteuid() == 0
 
@@ -584,27 +587,28 @@ def _special_setup(kind: str) -> Callable[[Path], None] | None:
 
 def cli_values() -> Iterator[Case]:
     sim = ("simulate", "--world", "corridor", "--duration", "1", "-o", "o.mcap")
+    # option ranges are typer's (issue 18): out of range is a usage error, exit 2
     sim_cases: list[tuple[tuple[str, ...], frozenset[int]]] = [
-        (("--seed", "-1"), ERROR),
-        (("--seed", str(2**64)), ERROR),
+        (("--seed", "-1"), USAGE),
+        (("--seed", str(2**64)), USAGE),
         (("--seed", "1.5"), USAGE),
         (("--seed", "x"), USAGE),
-        (("--duration", "nan"), ERROR),
-        (("--duration", "inf"), ERROR),
-        (("--duration", "-5"), ERROR),
-        (("--duration", "0"), ERROR),
-        (("--duration", "1e12"), ERROR),
-        (("--duration", "1e-9"), ERROR),
+        (("--duration", "nan"), USAGE),
+        (("--duration", "inf"), USAGE),
+        (("--duration", "-5"), USAGE),
+        (("--duration", "0"), USAGE),
+        (("--duration", "1e12"), USAGE),
+        (("--duration", "1e-9"), USAGE),
         (("--duration", "abc"), USAGE),
-        (("--heading-noise", "inf"), ERROR),
-        (("--heading-noise", "-5"), ERROR),
-        (("--heading-noise", "nan"), ERROR),
-        (("--heading-noise", "1e9"), ERROR),
+        (("--heading-noise", "inf"), USAGE),
+        (("--heading-noise", "-5"), USAGE),
+        (("--heading-noise", "nan"), USAGE),
+        (("--heading-noise", "1e9"), USAGE),
         (("--heading-noise", "0"), frozenset({0})),
-        (("--sensor-noise", "-1"), ERROR),
-        (("--sensor-noise", "inf"), ERROR),
-        (("--sensor-noise", "nan"), ERROR),
-        (("--sensor-noise", "1e9"), ERROR),
+        (("--sensor-noise", "-1"), USAGE),
+        (("--sensor-noise", "inf"), USAGE),
+        (("--sensor-noise", "nan"), USAGE),
+        (("--sensor-noise", "1e9"), USAGE),
         (("--sensor-noise", "0.05"), frozenset({0})),
         (("--start", "1,2"), ERROR),
         (("--start", "a,b,c"), ERROR),
@@ -654,8 +658,8 @@ def cli_values() -> Iterator[Case]:
         (("--trials", "0"), ERROR),
         (("--trials", "-3"), ERROR),
         (("--trials", "100000000"), ERROR),
-        (("--method", "bogus"), ERROR),
-        (("--likelihood", "bogus"), ERROR),
+        (("--method", "bogus"), CHOICE),
+        (("--likelihood", "bogus"), CHOICE),
         (("--seed", "-1"), ERROR),
         (("--method", "nnls"), frozenset({0})),
         (("--method", "arbitration"), frozenset({0})),
@@ -665,14 +669,14 @@ def cli_values() -> Iterator[Case]:
         )
     exe = ("execute", "t.yaml", "--world", "corridor", "-o", "r.mcap")
     for extra, codes in [
-        (("--max-time", "0"), ERROR),
-        (("--max-time", "-1"), ERROR),
-        (("--max-time", "nan"), ERROR),
-        (("--max-time", "inf"), ERROR),
-        (("--max-time", "1e12"), ERROR),
+        (("--max-time", "0"), USAGE),
+        (("--max-time", "-1"), USAGE),
+        (("--max-time", "nan"), USAGE),
+        (("--max-time", "inf"), USAGE),
+        (("--max-time", "1e12"), USAGE),
         (("--max-time", "1"), frozenset({0})),
-        (("--max-time", "1", "--seed", "-1"), ERROR),
-        (("--max-time", "1", "--sensor-noise", "-1"), ERROR),
+        (("--max-time", "1", "--seed", "-1"), USAGE),
+        (("--max-time", "1", "--sensor-noise", "-1"), USAGE),
         (("--max-time", "1", "--start", "1,2"), ERROR),
         (("--max-time", "1", "--start", "0,0,0"), ERROR),
         (("--max-time", "1", "--report", "r.json"), frozenset({0})),
@@ -683,6 +687,28 @@ def cli_values() -> Iterator[Case]:
             exe + extra,
             {"t.yaml": lambda b: b["table.yaml"]},
             codes,
+        )
+    # choices are enums typer offers: a bad one is a usage error before any file is read
+    for argv in [
+        ("import", "log.bag", "--format", "bogus"),
+        ("import", "log.bag", "--format", ""),
+        ("import", "log.bag", "--cmd-from", "bogus"),
+        ("import", "log.bag", "--teacher", "robot"),
+        ("teleop", "--input", "joystick", "-o", "t.mcap"),
+        ("teleop", "--input", "script", "--port", "70000", "-o", "t.mcap"),
+        ("teleop", "--input", "script", "--timeout", "0", "-o", "t.mcap"),
+        ("teleop", "--input", "script", "--timeout", "nan", "-o", "t.mcap"),
+        ("teleop", "--input", "script", "--duration", "-1", "-o", "t.mcap"),
+        ("teleop", "--input", "script", "--seed", "-1", "-o", "t.mcap"),
+        ("plot", "t.yaml", "-o", "p.png", "--whiskers", "nope"),
+        ("evaluate", "s.mcap", "--seed", str(2**63)),
+    ]:
+        yield Case(
+            " ".join(argv)[:80],
+            "cli",
+            argv,
+            {"log.bag": b"not a bag", "t.yaml": lambda b: b["table.yaml"], "s.mcap": lambda b: b["seg.mcap"]},
+            USAGE,
         )
     yield Case("no-args", "cli", (), {}, frozenset({0, 2}))
     yield Case("version", "cli", ("--version",), {}, frozenset({0}))

@@ -142,7 +142,6 @@ def test_same_input_same_bytes(files: dict[str, Path], tmp_path: Path) -> None:
     [
         (["missing.mcap", "-o", "x.png"], "no such file"),
         (["{table}", "-o", "x.jpg"], ".png or .svg"),
-        (["{table}", "-o", "x.png", "--whiskers", "nope"], "whiskers"),
     ],
 )
 def test_user_errors_are_one_line(
