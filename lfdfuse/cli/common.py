@@ -110,22 +110,6 @@ def sensor_noise_option() -> Any:
     )
 
 
-# estimate's options still check by hand (cli/estimate.py moves to typer's ranges with its
-# --method enum); these two go when it has
-
-
-def check_seed(seed: int) -> int:
-    if not 0 <= seed <= MAX_SEED:
-        raise ConfigError(f"--seed must be an integer from 0 to 2^63-1, got {seed}")
-    return seed
-
-
-def check_count(option: str, value: int, *, maximum: int) -> int:
-    if not 1 <= value <= maximum:
-        raise ConfigError(f"{option} must be an integer from 1 to {maximum}, got {value}")
-    return value
-
-
 def _exists(p: Path) -> bool:
     try:
         return p.exists()

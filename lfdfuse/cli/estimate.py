@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from lfdfuse.cli.app import app
-from lfdfuse.cli.common import check_count, check_outputs, check_seed, console, progress_bar, user_errors
+from lfdfuse.cli.common import check_outputs, console, progress_bar, seed_option, user_errors
 from lfdfuse.cli.render import print_table
 from lfdfuse.estimate.methods import EstimateOptions, Likelihood, Method
 from lfdfuse.estimate.paper import PFParams
@@ -29,12 +29,18 @@ def estimate_cmd(
         "paper's particle filter as published), nnls (least squares) or arbitration (best single behaviour).",
     ),
     particles: int = typer.Option(
-        SMCParams().particles, "--particles", help="Particles per row and trial (pf, paper)."
+        SMCParams().particles,
+        "--particles",
+        min=1,
+        max=100_000,
+        help="Particles per row and trial (pf, paper).",
     ),
     trials: int = typer.Option(
         1,
         "--trials",
         "-k",
+        min=1,
+        max=1000,
         help="Independent samplers (pf, paper; one vectorised pass) or bootstrap fits (nnls, arbitration); "
         "their spread is reported as trial_std.",
     ),
@@ -43,7 +49,7 @@ def estimate_cmd(
         "--likelihood",
         help="paper filter's likelihood: paper (2 - D/2, as published) or vonmises.",
     ),
-    seed: int = typer.Option(0, "--seed", help="Seed of the filters' random draws."),
+    seed: int = seed_option("Seed of the filters' random draws."),
     subgoals: bool = typer.Option(
         False,
         "--subgoals",
@@ -60,9 +66,6 @@ def estimate_cmd(
       lfdfuse estimate demo.seg.mcap --trials 30 -o fusion.yaml
       lfdfuse estimate demo.seg.mcap --method nnls -o nnls.yaml
     """
-    check_count("--particles", particles, maximum=100_000)
-    check_count("--trials", trials, maximum=1000)
-    check_seed(seed)
     check_outputs([out], [src])
     pf = replace(PFParams(), particles=particles, likelihood=likelihood.literal)
     smc = replace(SMCParams(), particles=particles)
