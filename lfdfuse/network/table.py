@@ -176,7 +176,7 @@ def _row(d: Any, behaviors: tuple[str, ...], where: str) -> FusionRow:
         raise ConfigError(f"fusion table: {where}.identifiable must be true or false")
     samples = d.get("samples")
     if samples is not None:
-        samples = integer(samples, f"fusion table: {where}.samples", lo=0)
+        samples = integer(samples, f"fusion table: {where}.samples", lo=0, hi=2**63 - 1)  # a count of steps
     fit = d.get("fit_error_deg")
     if fit is not None:
         fit = number(fit, f"fusion table: {where}.fit_error_deg", lo=0.0)
