@@ -307,7 +307,7 @@ class _Rows:
         return self.data[: self.n] if self.n == len(self.data) else self.data[: self.n].copy()
 
 
-def meta_float(meta: dict[str, str], key: str, default: float, *, path: str | Path = "log") -> float:
+def meta_float(meta: dict[str, str], key: str, default: float, *, path: str | Path | None = None) -> float:
     """A positive number from provenance metadata; the default when absent.
 
     Present but not a positive number (``"far"``, ``"nan"``, ``"-1"``) is a :class:`LogError`: the
@@ -321,7 +321,8 @@ def meta_float(meta: dict[str, str], key: str, default: float, *, path: str | Pa
     except (TypeError, ValueError):
         value = math.nan
     if not value > 0:  # also NaN
-        raise LogError(f"{path}: metadata {key} must be a positive number, got {text[:40]!r}")
+        where = f"{path}: " if path is not None else "the log's "
+        raise LogError(f"{where}metadata {key} must be a positive number, got {text[:40]!r}")
     return value
 
 
