@@ -60,15 +60,42 @@ MAX_CONFIG_BYTES = 4 * 2**20
 MAX_YAML_DEPTH = 64
 #: most nodes of a YAML document once its aliases are expanded (an anchor bomb is billions)
 MAX_YAML_NODES = 1_000_000
+#: longest integer literal read (a float holds at most 309 digits; Python refuses to parse past 4300)
+MAX_INT_CHARS = 400
+
+_STR_TAG = "tag:yaml.org,2002:str"
+_INT_TAG = "tag:yaml.org,2002:int"
+_MERGE_TAG = "tag:yaml.org,2002:merge"
 
 
 # libyaml's parser is ~20x faster than PyYAML's and refuses nesting past 1000 levels itself
 _Loader: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
+def _line(node: yaml.Node) -> str:
+    return f" at line {node.start_mark.line + 1}" if node.start_mark is not None else ""
+
+
+def _check_scalar(node: yaml.Node, origin: str, error: type[LfdError]) -> None:
+    if node.tag == _INT_TAG and len(node.value) > MAX_INT_CHARS:
+        raise error(f"{origin}: an integer of {len(node.value)} digits{_line(node)} (too large for a number)")
+
+
+def _check_keys(node: yaml.MappingNode, origin: str, error: type[LfdError]) -> None:
+    """Mapping keys are strings (a merge ``<<`` aside): every reader sorts and names them."""
+    for key, _value in node.value:
+        if key.tag == _MERGE_TAG:
+            continue
+        if not isinstance(key, yaml.ScalarNode) or key.tag != _STR_TAG:
+            text = key.value if isinstance(key, yaml.ScalarNode) else f"a {key.id}"
+            shown = text if len(text) <= 40 else text[:37] + "..."
+            raise error(f"{origin}: mapping key {shown!r}{_line(key)} must be a name (a string)")
+
+
 def _measure(root: yaml.Node, origin: str, error: type[LfdError]) -> None:
     """Refuse documents nested too deep or too big once aliases are expanded (an anchor bomb),
-    walking the composed node graph iteratively with each shared (aliased) node sized once."""
+    walking the composed node graph iteratively with each shared (aliased) node sized once;
+    on the way, refuse mapping keys that are not strings and integers too long for a number."""
     size: dict[int, int] = {}
     stack: list[tuple[yaml.Node, int, bool]] = [(root, 1, False)]
     while stack:
@@ -78,8 +105,11 @@ def _measure(root: yaml.Node, origin: str, error: type[LfdError]) -> None:
         if isinstance(node, yaml.SequenceNode):
             children = list(node.value)
         elif isinstance(node, yaml.MappingNode):
+            if not done:
+                _check_keys(node, origin, error)
             children = [c for kv in node.value for c in kv]
         else:
+            _check_scalar(node, origin, error)
             size[id(node)] = 1
             continue
         if done:
@@ -112,6 +142,8 @@ def parse_yaml(text: str, *, origin: str, error: type[LfdError] = ConfigError) -
         return loader.construct_document(root)
     except RecursionError:
         raise error(f"{origin}: YAML nested too deeply") from None
+    except (ValueError, OverflowError) as exc:  # a scalar its constructor refuses (a date 2001-13-45)
+        raise error(f"{origin}: malformed YAML value ({str(exc).splitlines()[0][:100]})") from exc
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""

@@ -1,8 +1,9 @@
 """Config files checked against the JSON schemas we ship (``schemas/``), with errors naming the key.
 
 The schemas say the shape (types, required and unknown keys, sizes); the parsers that follow
-(:mod:`lfdfuse.world.model`, :mod:`lfdfuse.network.table`, :mod:`lfdfuse.sources.tasks`) say the
-meaning (geometry, BAC ranges, targets that exist).
+(:mod:`lfdfuse.world.parse`, :mod:`lfdfuse.network.table`, :mod:`lfdfuse.sources.tasks`) say the
+meaning (geometry, BAC ranges, targets that exist), reading every number through :func:`number`
+or :func:`integer`: the type is checked before any arithmetic, then finiteness and the range.
 
 >>> validate({"task": [{"style": "keep-left"}]}, "task", origin="t.yaml")
 >>> validate({"task": [{"style": "moonwalk"}]}, "task", origin="t.yaml")
@@ -14,6 +15,7 @@ lfdfuse.errors.ConfigError: t.yaml: task[0].style: unknown value 'moonwalk' (val
 from __future__ import annotations
 
 import json
+import math
 from functools import cache
 from importlib import resources
 from typing import Any
@@ -44,8 +46,73 @@ def key_path(path: Any) -> str:
 
 
 def _short(value: Any) -> str:
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**60:
+        return f"an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"  # repr is slow past 4300
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+def number(
+    value: Any,
+    where: str,
+    *,
+    error: type[LfdError] = ConfigError,
+    lo: float = -math.inf,
+    hi: float = math.inf,
+) -> float:
+    """``value`` as a finite float in ``[lo, hi]``, else ``error`` naming ``where``.
+
+    >>> number(3, "start[0]")
+    3.0
+    >>> number(10**400, "start[0]")
+    Traceback (most recent call last):
+    ...
+    lfdfuse.errors.ConfigError: start[0] must be a finite number, got an integer of about 401 digits
+    >>> number("1.5", "fit_error_deg")
+    Traceback (most recent call last):
+    ...
+    lfdfuse.errors.ConfigError: fit_error_deg must be a finite number, got '1.5'
+    """
+    want = "a finite number" if lo == -math.inf and hi == math.inf else f"a number in [{lo:g}, {hi:g}]"
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise error(f"{where} must be {want}, got {_short(value)}")
+    try:
+        x = float(value)
+    except OverflowError:
+        raise error(f"{where} must be {want}, got {_short(value)}") from None
+    if not (math.isfinite(x) and lo <= x <= hi):
+        raise error(f"{where} must be {want}, got {_short(value)}")
+    return x
+
+
+def integer(
+    value: Any,
+    where: str,
+    *,
+    error: type[LfdError] = ConfigError,
+    lo: int | None = None,
+    hi: int | None = None,
+) -> int:
+    """``value`` as an integer in ``[lo, hi]`` (either bound optional), else ``error`` naming ``where``.
+
+    >>> integer(2**100, "bac", lo=0, hi=63)
+    Traceback (most recent call last):
+    ...
+    lfdfuse.errors.ConfigError: bac must be an integer in [0, 63], got 1267650600228229401496703205376
+    """
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, int)
+        or (lo is not None and value < lo)
+        or (hi is not None and value > hi)
+    ):
+        span = (
+            f" in [{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}]"
+            if lo is not None or hi is not None
+            else ""
+        )
+        raise error(f"{where} must be an integer{span}, got {_short(value)}")
+    return value
 
 
 def validate(data: Any, kind: str, *, origin: str, error: type[LfdError] = ConfigError) -> None:

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import io
 import math
+import os
 import stat
 import struct
 from collections.abc import Iterator
@@ -17,6 +19,7 @@ from mcap.exceptions import McapError
 from mcap.reader import make_reader
 
 from lfdfuse.errors import LogError
+from lfdfuse.log import stamps
 from lfdfuse.log.messages import PROVENANCE, RawMessage, from_stamp
 from lfdfuse.log.sensing import (
     ScanMessage,
@@ -46,10 +49,31 @@ _READ_ERRORS = (
     AssertionError,
     OverflowError,
     RuntimeError,  # lz4
+    MemoryError,  # a size the walk of _check_chunks did not reach (past damaged framing)
     struct.error,
     zstandard.ZstdError,
 )
 _IMPORT_SUFFIXES = (".bag", ".db3", ".clf", ".log", ".gz", ".dat")
+#: latest log time we read: times are int64 nanoseconds in our arrays (MCAP allows uint64)
+MAX_T_NS = stamps.MAX_T_NS
+
+
+class _Bounded(io.BufferedReader):
+    """A file whose reads never ask for more than what is left of it.
+
+    MCAP records carry their own lengths; a damaged or hostile one claims exabytes, and a plain
+    ``read(n)`` allocates ``n`` bytes before it finds the file shorter. Clamped, the read comes
+    back short and the mcap library reports a truncated record instead.
+    """
+
+    def __init__(self, raw: io.FileIO) -> None:
+        super().__init__(raw)
+        self._size = os.fstat(raw.fileno()).st_size
+
+    def read(self, size: int | None = -1, /) -> bytes:
+        if size is not None and size >= 0:
+            size = max(0, min(size, self._size - self.tell()))
+        return super().read(size)
 
 
 def check_log_file(path: str | Path) -> Path:
@@ -73,10 +97,39 @@ def check_log_file(path: str | Path) -> Path:
     return p
 
 
+#: largest chunk we decompress (writers use ~1-4 MB; the size is allocated before decompressing)
+MAX_CHUNK_BYTES = 2**30
+_CHUNK, _DATA_END, _FOOTER = 0x06, 0x0F, 0x02
+
+
+def _check_chunks(p: Path, stream: _Bounded) -> None:
+    """Refuse a chunk whose declared uncompressed size is absurd, before the mcap library allocates
+    it: a record walk over the data section (one small read per record), stopping where the framing
+    breaks (the library reports that itself)."""
+    size, pos = stream._size, len(MCAP_MAGIC)
+    while pos + 9 <= size:
+        stream.seek(pos)
+        head = stream.read(9 + 24)
+        if len(head) < 9:
+            break
+        opcode, length = struct.unpack_from("<BQ", head)
+        if opcode in (_DATA_END, _FOOTER):
+            break
+        if opcode == _CHUNK and len(head) == 33:
+            (uncompressed,) = struct.unpack_from("<Q", head, 9 + 16)
+            if uncompressed > MAX_CHUNK_BYTES:
+                raise LogError(
+                    f"{p}: not a readable MCAP file (a chunk at byte {pos} claims {uncompressed} bytes"
+                    f" uncompressed; at most {MAX_CHUNK_BYTES // 2**20} MB are read)"
+                )
+        pos += 9 + length
+    stream.seek(0)
+
+
 def _open(path: str | Path) -> Any:
     p = check_log_file(path)
     try:
-        stream = p.open("rb")
+        stream = _Bounded(io.FileIO(p, "rb"))
     except OSError as exc:
         raise LogError(f"cannot read {p}: {exc.strerror}") from exc
     if stream.read(8) != MCAP_MAGIC:
@@ -87,7 +140,11 @@ def _open(path: str | Path) -> Any:
             else "; other robot logs go through `lfdfuse import`"
         )
         raise LogError(f"{p}: not a readable MCAP file (it does not start like one){hint}")
-    stream.seek(0)
+    try:
+        _check_chunks(p, stream)
+    except BaseException:
+        stream.close()
+        raise
     return stream
 
 
@@ -96,12 +153,21 @@ def _unreadable(path: str | Path, exc: BaseException) -> LogError:
     return LogError(f"{path}: not a readable MCAP file (damaged: {text})")
 
 
+def _time(path: str | Path, topic: str, t_ns: int) -> int:
+    if t_ns > MAX_T_NS:
+        raise LogError(
+            f"{path}: a {topic} message has log time {t_ns} ns, past the int64 nanoseconds lfdfuse reads"
+        )
+    return t_ns
+
+
 def _iter(path: str | Path, topics: list[str] | None) -> Iterator[tuple[str, str, str, int, bytes]]:
     """``(topic, schema name, message encoding, log time ns, data)`` in log-time order."""
     with _open(path) as stream:
         try:
             reader = make_reader(stream)
             for schema, channel, message in reader.iter_messages(topics=topics, log_time_order=True):
+                _time(path, channel.topic, message.log_time)
                 yield (
                     channel.topic,
                     schema.name if schema else "",
@@ -129,6 +195,8 @@ def iter_raw(path: str | Path, *, exclude_prefix: str | None = None) -> Iterator
             for schema, channel, message in reader.iter_messages(log_time_order=True):
                 if exclude_prefix is not None and channel.topic.startswith(exclude_prefix):
                     continue
+                _time(path, channel.topic, message.log_time)
+                _time(path, channel.topic, message.publish_time)
                 yield RawMessage(
                     channel.topic,
                     schema.name if schema else "",
@@ -239,13 +307,23 @@ class _Rows:
         return self.data[: self.n] if self.n == len(self.data) else self.data[: self.n].copy()
 
 
-def meta_float(meta: dict[str, str], key: str, default: float) -> float:
-    """A positive number from provenance metadata; the default when absent or not one."""
-    try:
-        value = float(meta.get(key, default))
-    except ValueError:
+def meta_float(meta: dict[str, str], key: str, default: float, *, path: str | Path | None = None) -> float:
+    """A positive number from provenance metadata; the default when absent.
+
+    Present but not a positive number (``"far"``, ``"nan"``, ``"-1"``) is a :class:`LogError`: the
+    value sets which ranges count as no return, so a guess would change what is learned.
+    """
+    if key not in meta:
         return default
-    return value if value > 0 and not math.isnan(value) else default
+    text = meta[key]
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        value = math.nan
+    if not value > 0:  # also NaN
+        where = f"{path}: " if path is not None else "the log's "
+        raise LogError(f"{where}metadata {key} must be a positive number, got {text[:40]!r}")
+    return value
 
 
 _DECODE_ERRORS = (orjson.JSONDecodeError, KeyError, TypeError, ValueError, IndexError, AttributeError)
@@ -378,7 +456,7 @@ def read_run(path: str | Path) -> Run:
     meta: dict[str, str] = info.metadata.get(PROVENANCE, {})
     # without our metadata the max range is unknown: then no range counts as a sentinel (inf), which
     # is harmless to the primitives, which only look at returns nearer than d_max
-    max_range = meta_float(meta, "laser_max_range_m", math.inf)
+    max_range = meta_float(meta, "laser_max_range_m", math.inf, path=path)
     geom = scan_geometry(first_scan, ranges.shape[1], max_range)
     cmd = np.array(cmds, dtype=np.float64).reshape(-1, 2)
     run_kwargs: dict[str, Any] = {}
@@ -387,7 +465,7 @@ def read_run(path: str | Path) -> Run:
         sr = sonars.array()
         run_kwargs["sonar_m"] = sr[hold(st, t)]
         run_kwargs["sonar_geometry"] = scan_geometry(
-            first_sonar, sr.shape[1], meta_float(meta, "sonar_max_range_m", math.inf)
+            first_sonar, sr.shape[1], meta_float(meta, "sonar_max_range_m", math.inf, path=path)
         )
     if poses:
         pa = np.array(poses, dtype=np.float64)

@@ -16,8 +16,33 @@ def stamp(t_ns: int) -> dict[str, int]:
     return {"sec": t_ns // 1_000_000_000, "nsec": t_ns % 1_000_000_000}
 
 
+#: the int64 nanoseconds our arrays hold
+MIN_T_NS, MAX_T_NS = -(2**63), 2**63 - 1
+
+
+def _whole(value: Any) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"a stamp's sec and nsec must be integers, got {str(value)[:40]!r}")
+    if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
+        raise ValueError(f"a stamp's sec and nsec must be integers, got {value!r}")
+    return int(value)
+
+
 def from_stamp(d: dict[str, Any]) -> int:
-    return int(d["sec"]) * 1_000_000_000 + int(d["nsec"])
+    """``{sec, nsec}`` as integer nanoseconds; :class:`ValueError` when not integers or past int64.
+
+    >>> from_stamp(stamp(1_700_000_000_123_456_789))
+    1700000000123456789
+    >>> from_stamp({"sec": 2**64, "nsec": 0})
+    Traceback (most recent call last):
+    ...
+    ValueError: a stamp of 18446744073709551616 s is past the int64 nanoseconds lfdfuse reads
+    """
+    sec, nsec = _whole(d["sec"]), _whole(d["nsec"])
+    t = sec * 1_000_000_000 + nsec
+    if not MIN_T_NS <= t <= MAX_T_NS:
+        raise ValueError(f"a stamp of {sec} s is past the int64 nanoseconds lfdfuse reads")
+    return t
 
 
 def quat_z(theta: float) -> dict[str, float]:

@@ -6,7 +6,6 @@ the problem (``network.steps[1].fusion[0].weights.avoid: negative weight``).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -17,6 +16,7 @@ from lfdfuse.behaviors.primitives import ATTRACT, BASE_BEHAVIORS
 from lfdfuse.errors import ConfigError
 from lfdfuse.files import read_yaml, write_text_atomic
 from lfdfuse.network.landmarks import Landmark
+from lfdfuse.validate import integer, number
 
 FORMAT = "lfdfuse/fusion-table@1"
 
@@ -143,11 +143,10 @@ def _weights(
             raise ConfigError(
                 f"fusion table: {where}: unknown behaviour {name!r} (the table's behaviors: {', '.join(behaviors)})"
             )
-        if isinstance(val, bool) or not isinstance(val, (int, float)) or not math.isfinite(val):
-            raise ConfigError(f"fusion table: {where}.{name}: weight must be a finite number")
-        if val < 0:
-            raise ConfigError(f"fusion table: {where}.{name}: negative weight {val}")
-        out[str(name)] = float(val)
+        w = number(val, f"fusion table: {where}.{name}: weight")
+        if w < 0:
+            raise ConfigError(f"fusion table: {where}.{name}: negative weight {w:g}")
+        out[str(name)] = w
     if not allow_zero_sum and sum(out.values()) <= 0:
         raise ConfigError(f"fusion table: {where}: weights sum to zero")
     return out
@@ -176,16 +175,21 @@ def _row(d: Any, behaviors: tuple[str, ...], where: str) -> FusionRow:
     if ident is not None and not isinstance(ident, bool):
         raise ConfigError(f"fusion table: {where}.identifiable must be true or false")
     samples = d.get("samples")
-    if samples is not None and (isinstance(samples, bool) or not isinstance(samples, int) or samples < 0):
-        raise ConfigError(f"fusion table: {where}.samples must be a non-negative integer")
+    if samples is not None:
+        samples = integer(samples, f"fusion table: {where}.samples", lo=0, hi=2**63 - 1)  # a count of steps
     fit = d.get("fit_error_deg")
+    if fit is not None:
+        fit = number(fit, f"fusion table: {where}.fit_error_deg", lo=0.0)
+    low = d.get("low_samples", False)
+    if not isinstance(low, bool):
+        raise ConfigError(f"fusion table: {where}.low_samples must be true or false")
     return FusionRow(
         bac,
         weights,
         std,
         samples,
-        None if fit is None else float(fit),
-        bool(d.get("low_samples", False)),
+        fit,
+        low,
         tstd,
         ident,
     )

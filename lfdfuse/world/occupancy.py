@@ -29,7 +29,8 @@ from scipy import ndimage
 from skimage import measure
 
 from lfdfuse.errors import WorldError
-from lfdfuse.world.model import World, parse_world
+from lfdfuse.validate import number
+from lfdfuse.world.parse import World, parse_world
 
 #: the keys of a map_server YAML (ROS 1 and ROS 2)
 MAP_KEYS = ("image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh", "mode")
@@ -65,10 +66,7 @@ def is_map_yaml(data: Any) -> bool:
 
 
 def _number(data: dict[str, Any], key: str, origin: str, *, lo: float, hi: float) -> float:
-    value = data[key]
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
-        raise WorldError(f"{origin}: {key!r} must be a number in [{lo:g}, {hi:g}], got {value!r}")
-    return float(value)
+    return number(data[key], f"{origin}: {key!r}", error=WorldError, lo=lo, hi=hi)
 
 
 def parse_map_yaml(data: dict[str, Any], *, folder: Path, origin: str) -> MapInfo:
