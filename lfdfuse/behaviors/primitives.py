@@ -170,11 +170,11 @@ class BehaviorOutputs:
     def bac(self) -> np.ndarray:
         """The BAC bit mask ``(N,)`` int64: bit i set ⇔ ``names[i]`` applicable."""
         bits = np.left_shift(np.int64(1), np.arange(len(self.names), dtype=np.int64))
-        return (self.applicable.astype(np.int64) * bits).sum(axis=1)
+        return np.asarray((self.applicable.astype(np.int64) * bits).sum(axis=1))
 
 
 def _wrap(a: np.ndarray) -> np.ndarray:
-    return np.arctan2(np.sin(a), np.cos(a))
+    return np.asarray(np.arctan2(np.sin(a), np.cos(a)))
 
 
 def _dot(weights: np.ndarray, dirs: np.ndarray) -> np.ndarray:
@@ -192,7 +192,7 @@ def _pool_strongest(weights: np.ndarray, dirs: np.ndarray) -> np.ndarray:
     norm = np.hypot(s[:, 0], s[:, 1])
     mag = weights.max(axis=1, initial=0.0)
     scale = np.divide(mag, norm, out=np.zeros_like(norm), where=norm > 1e-12)
-    return s * scale[:, None]
+    return np.asarray(s * scale[:, None])
 
 
 def distinct_beams(g: ScanGeometry) -> np.ndarray:
@@ -248,7 +248,7 @@ def compute(
         rmin = np.where(hit, rn, np.inf).min(axis=1, initial=np.inf)
         mag = np.where(np.isfinite(rmin), rmin / d, 0.0)
         scale = np.divide(mag, norm, out=np.zeros_like(norm), where=norm > 1e-12)
-        return s * scale[:, None], hit.any(axis=1)
+        return np.asarray(s * scale[:, None]), hit.any(axis=1)
 
     def wall_side(sector: np.ndarray, turn: float) -> tuple[np.ndarray, np.ndarray]:
         hit = near & sector[None, :]

@@ -156,7 +156,7 @@ def sample_prior(
         + np.log(np.maximum(rng.uniform(0.0, 1.0, (*shape, n)), 1e-300)) / model.alpha
     )
     lg = np.where(mask, lg, -np.inf)
-    return lg - logsumexp(lg, axis=-1, keepdims=True)
+    return np.asarray(lg - logsumexp(lg, axis=-1, keepdims=True))
 
 
 def prior_tangent_variance(n: int, model: FusionModel) -> float:

@@ -54,4 +54,4 @@ def fused_vectors(
     zero = np.hypot(fused[:, 0], fused[:, 1]) <= 1e-9
     if zero.any():
         fused[zero] = np.einsum("tkd,tk->td", vec[zero], fb[zero])
-    return fused
+    return np.asarray(fused)

@@ -14,7 +14,7 @@ def normalised(logw: np.ndarray) -> np.ndarray:
     """Weights ``(C, M)`` summing to 1 along the last axis, from log-weights (−inf allowed)."""
     top = np.max(logw, axis=-1, keepdims=True)
     w = np.exp(logw - np.where(np.isfinite(top), top, 0.0))
-    return w / w.sum(axis=-1, keepdims=True)
+    return np.asarray(w / w.sum(axis=-1, keepdims=True))
 
 
 def ess(logw: np.ndarray) -> np.ndarray:
@@ -25,7 +25,7 @@ def ess(logw: np.ndarray) -> np.ndarray:
     [4.0]
     """
     w = normalised(logw)
-    return 1.0 / np.einsum("cm,cm->c", w, w)
+    return np.asarray(1.0 / np.einsum("cm,cm->c", w, w))
 
 
 def systematic(logw: np.ndarray, u: np.ndarray) -> np.ndarray:
@@ -39,7 +39,7 @@ def systematic(logw: np.ndarray, u: np.ndarray) -> np.ndarray:
     pos = (u[:, None] + np.arange(m)[None, :]) / m
     offs = np.arange(c)[:, None] * 2.0  # disjoint ranges let one searchsorted serve every chain
     idx = np.searchsorted((cs + offs).ravel(), (pos + offs).ravel(), side="right").reshape(c, m)
-    return np.minimum(idx - np.arange(c)[:, None] * m, m - 1)
+    return np.asarray(np.minimum(idx - np.arange(c)[:, None] * m, m - 1))
 
 
 def multinomial(logw: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -48,7 +48,7 @@ def multinomial(logw: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     cs = np.cumsum(normalised(logw), axis=1)
     cs[:, -1] = 1.0
     u = rng.uniform(0.0, 1.0, (c, m))
-    return np.minimum((cs[:, None, :] <= u[:, :, None]).sum(axis=2), m - 1)
+    return np.asarray(np.minimum((cs[:, None, :] <= u[:, :, None]).sum(axis=2), m - 1))
 
 
 def resample(logw: np.ndarray, rng: np.random.Generator) -> np.ndarray:

@@ -120,7 +120,7 @@ def _score(
 
 
 def _wrap(a: np.ndarray) -> np.ndarray:
-    return np.arctan2(np.sin(a), np.cos(a))
+    return np.asarray(np.arctan2(np.sin(a), np.cos(a)))
 
 
 def evaluate(

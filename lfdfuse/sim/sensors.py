@@ -121,7 +121,7 @@ class Sensors:
         if std > 0.0:
             hit = r < max_m
             r = np.where(hit, np.clip(r + rng.normal(0.0, std, r.shape), 0.0, max_m), r)
-        return r
+        return np.asarray(r)
 
     def sense(self, pose: Pose, rng: np.random.Generator) -> Reading:
         lp, sp = self.params.laser, self.params.sonar

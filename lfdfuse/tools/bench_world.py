@@ -72,7 +72,7 @@ class _PreviousCaster:
             return np.full(angles.shape, self.max_range_m)
         n = len(angles)
         t = intersect(np.full(n, x), np.full(n, y), np.cos(angles), np.sin(angles), seg)
-        return np.minimum(t.min(axis=1), self.max_range_m)
+        return np.asarray(np.minimum(t.min(axis=1), self.max_range_m))
 
 
 def _free_poses(rc: RayCaster, segments: np.ndarray, n: int, seed: int) -> np.ndarray:

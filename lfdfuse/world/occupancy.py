@@ -136,7 +136,7 @@ def read_shades(path: Path, *, origin: str) -> np.ndarray:
         has_alpha = img.mode in ("LA", "RGBA")
     if pixels.ndim == 2:
         return pixels
-    return pixels[:, :, : pixels.shape[2] - int(has_alpha)].mean(axis=2)
+    return np.asarray(pixels[:, :, : pixels.shape[2] - int(has_alpha)].mean(axis=2))
 
 
 def free_cells(shades: np.ndarray, info: MapInfo) -> np.ndarray:
@@ -160,7 +160,7 @@ def free_cells(shades: np.ndarray, info: MapInfo) -> np.ndarray:
 def _clearance_px(free: np.ndarray) -> np.ndarray:
     """Distance (cells) from each free cell centre to the nearest non-free cell edge (0 if not free)."""
     padded = np.pad(free, 1, constant_values=False)
-    return np.maximum(ndimage.distance_transform_edt(padded)[1:-1, 1:-1] - 0.5, 0.0)
+    return np.asarray(np.maximum(ndimage.distance_transform_edt(padded)[1:-1, 1:-1] - 0.5, 0.0))
 
 
 def fill_pockets(free: np.ndarray, *, radius_px: float) -> np.ndarray:
@@ -170,7 +170,7 @@ def fill_pockets(free: np.ndarray, *, radius_px: float) -> np.ndarray:
         return free
     best = ndimage.maximum(_clearance_px(free), labels, index=np.arange(1, n + 1))
     keep = np.concatenate([[False], np.asarray(best) >= radius_px])
-    return keep[labels]
+    return np.asarray(keep[labels])
 
 
 def wall_lines(free: np.ndarray, *, tolerance_px: float) -> list[np.ndarray]:

@@ -50,7 +50,7 @@ def _point_segment_distance(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> 
     t = np.clip(t, 0.0, 1.0)
     dx = ax + t * ex - px[:, None]
     dy = ay + t * ey - py[:, None]
-    return np.sqrt(dx * dx + dy * dy)
+    return np.asarray(np.sqrt(dx * dx + dy * dy))
 
 
 def _pair_distance(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> np.ndarray:
@@ -64,7 +64,7 @@ def _pair_distance(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> np.ndarra
     t = np.clip(((px - ax) * ex + (py - ay) * ey) / np.where(ll > 0, ll, 1.0), 0.0, 1.0)
     dx = ax + t * ex - px
     dy = ay + t * ey - py
-    return np.sqrt(dx * dx + dy * dy)
+    return np.asarray(np.sqrt(dx * dx + dy * dy))
 
 
 def near_pairs(
@@ -323,7 +323,7 @@ class RayCaster:
             active = active[best[active] > band.cut_m]
             if len(active) == 0:
                 break
-        return np.minimum(best, self.max_range_m, out=best)
+        return np.asarray(np.minimum(best, self.max_range_m, out=best))
 
     @staticmethod
     def _facing(band: _Band, phi: np.ndarray) -> _Band:

@@ -334,7 +334,7 @@ def numbers(
         }
         for k, v in results.learned.items()
     }
-    return _clean(
+    report: dict[str, Any] = _clean(
         {
             "format": "lfdfuse/paper-report@1",
             "seed": results.seed,
@@ -348,3 +348,4 @@ def numbers(
             "figures": list(figures),
         }
     )
+    return report
