@@ -165,7 +165,6 @@ class DriveCore:
 
     def on_odom(self, odom: LiveOdom) -> None:
         self.odom = odom
-        self.watchdog.saw(odom.t_ns)
 
     def on_targets(self, targets: LiveTargets) -> None:
         self.targets = targets

@@ -16,6 +16,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from enum import Enum
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -144,6 +145,7 @@ def _stamp_ns(header: Any) -> int:
 # -- CDR (foxglove_bridge) ----------------------------------------------------------------------
 
 
+@lru_cache(maxsize=64)  # parsing a definition takes ~0.1 s; a reconnect advertises the same ones
 def typestore_for(schema_name: str, schema: str) -> Typestore:
     """A type store holding ``schema_name`` from its ``ros2msg`` text (with its dependencies);
     the standard ROS 2 (Humble) store when the server sent no text."""

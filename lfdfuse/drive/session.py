@@ -57,11 +57,12 @@ from lfdfuse.network.table import FusionTable
 
 Notify = Callable[[str], None]
 #: the first connection must open within this (a later one is retried while --duration lasts)
-CONNECT_TIMEOUT_S = 5.0
+CONNECT_TIMEOUT_S = 3.0
 #: how long after connecting the scan channel must be advertised
 ADVERTISE_TIMEOUT_S = 3.0
 BACKOFF_S = (0.2, 2.0)  # first retry delay, the longest
 STATUS_PERIOD_S = 5.0
+ZERO_PERIOD_S = 0.1  # the zero Twist's repeat while blind
 _OUR_CHANNEL = 1
 
 
@@ -390,10 +391,14 @@ class _Session:
             core = self.core
             if core is None or self.opts.shadow or not st.advertised:
                 continue
-            if core.watchdog.blind(time.monotonic()):
+            now = time.monotonic()
+            if core.watchdog.blind(now):
                 if not self._blind_noted and core.watchdog.last_fresh_s is not None:
                     self.notify("no fresh scan for 0.5 s: stopping the robot until scans return")
                     self._blind_noted = True
+                if now - st.last_zero_s < ZERO_PERIOD_S:
+                    continue  # looks at 20 Hz, repeats the zero Twist at 10 Hz
+                st.last_zero_s = now
                 try:
                     await self._send_zero(ws, st, source="stale")
                 except ConnectionClosed:
@@ -472,6 +477,7 @@ class _Conn:
     odom_sub: int | None = None
     camera: bool = False
     advertised: bool = False
+    last_zero_s: float = -math.inf
 
     def topics(self) -> set[str]:
         return {c.topic for c in self.channels.values()}
