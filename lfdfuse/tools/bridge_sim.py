@@ -13,7 +13,7 @@ and bring it back on the same port.
 :class:`BagReplay` republishes a ROS 2 MCAP bag's CDR messages with their own schemas, paced
 by their log times (``speed`` × real time).
 
-Not part of the pipeline: a test rig (``python -m lfdfuse.tools.bridge_sim --help``).
+Not part of the pipeline: a test rig (``tests/drive``, ``lfdfuse.tools.bench_drive``).
 """
 
 from __future__ import annotations
@@ -36,6 +36,7 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from lfdfuse.log import messages as msg
 from lfdfuse.log.schemas import schema_text
+from lfdfuse.sim.loop import side_beam_index
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.sim.simulator import Observation, Simulator
@@ -179,6 +180,7 @@ class BridgeSim:
     command_timeout_s: float = 1.0  # lockstep: how long a scan waits for its command
     received: list[Received] = field(default_factory=list)
     poses: list[tuple[float, float, float]] = field(default_factory=list)
+    sides: list[tuple[float, float]] = field(default_factory=list)  # laser range at +90°, −90°
     scans_paused: threading.Event = field(default_factory=threading.Event)
     stopped: threading.Event = field(default_factory=threading.Event)
 
@@ -263,11 +265,12 @@ class BridgeSim:
             if not self.scans_paused.is_set():
                 self.channels["/scan"].log(orjson.dumps(msg.laser_scan(t, r.ranges_m, geom)), log_time=t)
 
-    def wait_for_subscriber(self, timeout_s: float = 10.0) -> bool:
+    def wait_for_subscriber(self, timeout_s: float = 10.0, *, publisher: bool = True) -> bool:
+        """Wait until a client subscribed to ``/scan`` (and, with ``publisher``, advertised a channel)."""
         end = time.monotonic() + timeout_s
         while time.monotonic() < end:
             with self.listener.lock:
-                if "/scan" in self.listener.subscribed and self.listener.channels:
+                if "/scan" in self.listener.subscribed and (self.listener.channels or not publisher):
                     return True
             time.sleep(0.01)
         return False
@@ -288,10 +291,13 @@ class BridgeSim:
         obs = self.sim.reset(self.start)
         cmd = (0.0, 0.0)
         t_next = time.monotonic()
+        angles = self.sensors.laser.geometry.angles
+        i_left, i_right = side_beam_index(angles, math.pi / 2), side_beam_index(angles, -math.pi / 2)
         for _ in range(int(round(seconds / dt))):
             if self.stopped.is_set():
                 break
             self.poses.append(obs.pose.as_tuple())
+            self.sides.append((float(obs.reading.ranges_m[i_left]), float(obs.reading.ranges_m[i_right])))
             self.publish(obs)
             if self.lockstep and not self.scans_paused.is_set():
                 got = self._take(self.command_timeout_s)
