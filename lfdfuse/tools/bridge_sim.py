@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import queue
+import sys
 import threading
 import time
 from dataclasses import dataclass, field
@@ -406,3 +407,26 @@ class BagReplay:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def main() -> None:
+    """Serve a simulated robot over the Foxglove protocol in real time (the drive benchmark's robot)."""
+    import argparse
+
+    from lfdfuse.world.model import load_world
+
+    ap = argparse.ArgumentParser(description=main.__doc__)
+    ap.add_argument("--world", default="tee")
+    ap.add_argument("--encoding", choices=("cdr", "json"), default="cdr")
+    ap.add_argument("--seconds", type=float, default=30.0)
+    ap.add_argument("--port", type=int, default=0)
+    args = ap.parse_args()
+    with BridgeSim(load_world(args.world), encoding=args.encoding, lockstep=False, port=args.port) as robot:
+        sys.stdout.write(f"{robot.url}\n")
+        sys.stdout.flush()
+        if robot.wait_for_subscriber(60.0):
+            robot.run(args.seconds)
+
+
+if __name__ == "__main__":
+    main()

@@ -68,4 +68,6 @@ def test_a_server_without_the_scan_topic(keep_left: Path, tmp_path: Path) -> Non
     with BridgeSim(load_world("tee"), encoding="cdr", lockstep=False) as robot:
         res = runner.invoke(app, ["drive", str(keep_left), "--connect", robot.url, "--scan", "/laser"])
     assert res.exit_code == 1
-    _one_error_line(res.output, "the server advertises no scan on /laser (it has: /odom, /scan, /tf, /tf_static)")
+    _one_error_line(
+        res.output, "the server advertises no scan on /laser (it has: /odom, /scan, /tf, /tf_static)"
+    )

@@ -62,8 +62,18 @@ def test_keep_left_learned_in_building_drives_tee_over_the_wire(
         assert "attract_red" in (s.behaviors.missing if s.behaviors else {})
     report = json.loads(mcap_check(out))
     assert report["ok"] and report["outOfOrder"] == 0
-    assert {"/scan", "/pose", "/tf", "/cmd_vel", "/lfd/behaviors", "/lfd/bac", "/lfd/step", "/lfd/fused",
-            "/lfd/overlay", "/lfd/command"} <= set(report["counts"])
+    assert {
+        "/scan",
+        "/pose",
+        "/tf",
+        "/cmd_vel",
+        "/lfd/behaviors",
+        "/lfd/bac",
+        "/lfd/step",
+        "/lfd/fused",
+        "/lfd/overlay",
+        "/lfd/command",
+    } <= set(report["counts"])
     # what was sent is what the robot got, in order (the last zero Twist came after it stopped)
     sent = [json.loads(d)["linear"]["x"] for _, _, _, d in iter_messages(out, topics=["/cmd_vel"])]
     got = [r.v_mps for r in robot.received]
@@ -97,7 +107,10 @@ def test_drive_the_real_teleop_server_then_sigterm(keep_left: Path, tmp_path: Pa
     demo, live_log = tmp_path / "teleop.mcap", tmp_path / "live.mcap"
     teleop = subprocess.Popen(
         [EXE, "teleop", "--input", "foxglove", "--port", "0", "--world", "tee", "-o", str(demo)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
     )
     try:
         assert teleop.stdout is not None
@@ -109,7 +122,10 @@ def test_drive_the_real_teleop_server_then_sigterm(keep_left: Path, tmp_path: Pa
             url = m.group(0) if m else ""
         drive = subprocess.Popen(
             [EXE, "drive", str(keep_left), "--connect", url, "--odom", "/pose", "-o", str(live_log)],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
         )
         assert drive.stderr is not None
         notes = [drive.stderr.readline() for _ in range(2)]  # "drive … → url", "behaviours: …"

@@ -38,12 +38,18 @@ def test_the_core_commands_exactly_what_execute_would(keep_left: Path) -> None:
     moved = 0.0
     for k in range(150):
         t = (k + 1) * 100_000_000
-        sent = replace(obs, t_ns=t, reading=Reading(np.round(obs.reading.ranges_m, 3), np.zeros(0), obs.reading.detections))
+        sent = replace(
+            obs,
+            t_ns=t,
+            reading=Reading(np.round(obs.reading.ranges_m, 3), np.zeros(0), obs.reading.detections),
+        )
         want = ref.command(sent)
         p = obs.pose
         core.on_odom(LiveOdom(t, p.x, p.y, p.theta, "base_link"))
         core.on_targets(LiveTargets(t, obs.reading.detections))
-        tick = core.scan(SCAN(orjson.dumps(msg.laser_scan(t, obs.reading.ranges_m, params.laser.geometry))), k * 0.1)
+        tick = core.scan(
+            SCAN(orjson.dumps(msg.laser_scan(t, obs.reading.ranges_m, params.laser.geometry))), k * 0.1
+        )
         assert isinstance(tick, Tick)
         assert tick.network == want, k
         moved += want[0] * 0.1
@@ -64,7 +70,9 @@ def test_a_table_needing_only_missing_inputs_is_refused() -> None:
     with pytest.raises(ConfigError, match="every step of the table needs camera and sonar"):
         check_applicable(app)
     # one runnable step is enough; a camera makes attract applicable
-    check_applicable(applicability(_table([{"attract_red": 1.0}, {"wander_left": 0.8, "sonar_avoid": 0.2}]), Inputs()))
+    check_applicable(
+        applicability(_table([{"attract_red": 1.0}, {"wander_left": 0.8, "sonar_avoid": 0.2}]), Inputs())
+    )
     check_applicable(applicability(_table([{"attract_red": 1.0}]), Inputs(camera=True)))
 
 

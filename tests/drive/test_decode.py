@@ -88,8 +88,12 @@ def test_lfdfuse_json_dialect() -> None:
     rec = decoder_for(channel("foxglove.LaserScan", "json"))(orjson.dumps(msg.laser_scan(7, ranges, geom)))
     assert isinstance(rec, LiveScan) and rec.frame == "base_link"
     assert rec.record.count == geom.count and rec.record.increment_rad == pytest.approx(geom.increment_rad)
-    assert np.isinf(rec.record.ranges_m[-1]) and np.allclose(rec.record.ranges_m[:-1], np.round(ranges[:-1], 3))
-    pose = decoder_for(channel("foxglove.PoseInFrame", "json"))(orjson.dumps(msg.pose_in_frame(7, 1.0, 2.0, 0.5)))
+    assert np.isinf(rec.record.ranges_m[-1]) and np.allclose(
+        rec.record.ranges_m[:-1], np.round(ranges[:-1], 3)
+    )
+    pose = decoder_for(channel("foxglove.PoseInFrame", "json"))(
+        orjson.dumps(msg.pose_in_frame(7, 1.0, 2.0, 0.5))
+    )
     assert isinstance(pose, LiveOdom) and (pose.x, pose.y) == (1.0, 2.0) and pose.theta == pytest.approx(0.5)
     assert role_of(channel("lfdfuse.TargetDetections", "json")) is Role.TARGETS
     assert role_of(channel("foxglove.SceneUpdate", "json")) is None

@@ -31,8 +31,14 @@ def test_server_info_and_advertise() -> None:
             {
                 "op": "advertise",
                 "channels": [
-                    {"id": 3, "topic": "/scan", "encoding": "cdr", "schemaName": "sensor_msgs/msg/LaserScan",
-                     "schemaEncoding": "ros2msg", "schema": "float32 a"},
+                    {
+                        "id": 3,
+                        "topic": "/scan",
+                        "encoding": "cdr",
+                        "schemaName": "sensor_msgs/msg/LaserScan",
+                        "schemaEncoding": "ros2msg",
+                        "schema": "float32 a",
+                    },
                     {"id": 4, "topic": "/x", "encoding": "json", "schemaName": "X"},
                 ],
             }
@@ -47,14 +53,23 @@ def test_server_info_and_advertise() -> None:
 
 def test_our_text_frames_are_protocol_json() -> None:
     sub = orjson.loads(wire.subscribe([(1, 10), (2, 11)]))
-    assert sub == {"op": "subscribe", "subscriptions": [{"id": 1, "channelId": 10}, {"id": 2, "channelId": 11}]}
-    adv = orjson.loads(wire.advertise(channel_id=1, topic="/cmd_vel", encoding="cdr", schema_name="T", schema="s"))
+    assert sub == {
+        "op": "subscribe",
+        "subscriptions": [{"id": 1, "channelId": 10}, {"id": 2, "channelId": 11}],
+    }
+    adv = orjson.loads(
+        wire.advertise(channel_id=1, topic="/cmd_vel", encoding="cdr", schema_name="T", schema="s")
+    )
     assert adv["channels"][0]["schemaEncoding"] == "ros2msg"
-    adv = orjson.loads(wire.advertise(channel_id=1, topic="/cmd_vel", encoding="json", schema_name="T", schema=""))
+    adv = orjson.loads(
+        wire.advertise(channel_id=1, topic="/cmd_vel", encoding="json", schema_name="T", schema="")
+    )
     assert "schema" not in adv["channels"][0]
 
 
-@pytest.mark.parametrize("frame", ["not json", '{"no":"op"}', '{"op":"advertise"}', '{"op":"advertise","channels":[{"id":"x"}]}'])
+@pytest.mark.parametrize(
+    "frame", ["not json", '{"no":"op"}', '{"op":"advertise"}', '{"op":"advertise","channels":[{"id":"x"}]}']
+)
 def test_malformed_frames_raise_wire_error(frame: str) -> None:
     with pytest.raises(wire.WireError):
         wire.parse_frame(frame)
