@@ -411,11 +411,12 @@ class _Session:
         self.stopper.bind(loop, stop)
         if self.stopper.reason:
             stop.set()
-        handlers = []
+        handlers: dict[signal.Signals, Any] = {}
         for sig in (signal.SIGINT, signal.SIGTERM):
             try:
+                previous = signal.getsignal(sig)
                 loop.add_signal_handler(sig, self.stopper.stop, f"signal {sig.name}")
-                handlers.append(sig)
+                handlers[sig] = previous
             except (RuntimeError, ValueError, NotImplementedError):
                 pass  # not the main thread (a test): stop through the Stopper
         timer = None
@@ -459,8 +460,9 @@ class _Session:
         finally:
             if timer is not None:
                 timer.cancel()
-            for sig in handlers:
+            for sig, previous in handlers.items():
                 loop.remove_signal_handler(sig)
+                signal.signal(sig, previous)  # the caller's (the CLI's SIGTERM → clean unwinding)
         return self.stopper.reason or "stopped"
 
 
