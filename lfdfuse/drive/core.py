@@ -223,6 +223,7 @@ class DriveCore:
         obs = Observation(self._k, t_ns, pose, reading)
         self._k += 1
         v, w = self.limits.clamp(*self.driver.command(obs))
+        self.watchdog.commanded(now_s)
         err = self._agree()
         return Tick(obs, (v, w), self.robot_cmd, err)
 

@@ -71,7 +71,7 @@ class Watchdog:
         self.max_age_s = max_age_s
         self.last_stamp_ns: int | None = None
         self.min_lag_s: float | None = None  # the smallest arrival − stamp seen: the link's own delay
-        self.last_fresh_s: float | None = None  # when the last fresh scan arrived
+        self.last_fresh_s: float | None = None  # when a fresh scan last gave a command
 
     def scan(self, stamp_ns: int, now_s: float) -> str:
         """'' for a fresh scan (and remember it), else why it is stale."""
@@ -84,11 +84,15 @@ class Watchdog:
         if late > self.max_age_s:
             return f"it arrived {late:.2f} s later than scans do"
         self.last_stamp_ns = stamp_ns
-        self.last_fresh_s = now_s
         return ""
 
+    def commanded(self, now_s: float) -> None:
+        """A fresh scan gave a command: the robot sees. (A fresh scan the network could not use —
+        its mounting unknown, a foreign beam layout — leaves the robot blind.)"""
+        self.last_fresh_s = now_s
+
     def blind(self, now_s: float) -> bool:
-        """No fresh scan for longer than ``max_age_s`` (or none yet)."""
+        """No command from a fresh scan for longer than ``max_age_s`` (or none yet)."""
         return self.last_fresh_s is None or now_s - self.last_fresh_s > self.max_age_s
 
     def reset(self) -> None:

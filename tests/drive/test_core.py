@@ -105,3 +105,17 @@ def test_shadow_agreement_is_the_heading_error(keep_left: Path) -> None:
     assert dec is not None
     assert tick.heading_error_deg == pytest.approx(abs(math.degrees(math.atan2(dec.fused[1], dec.fused[0]))))
     assert core.agreement.mean_deg == pytest.approx(tick.heading_error_deg)
+
+
+def test_scans_the_network_cannot_use_leave_the_robot_blind(keep_left: Path) -> None:
+    """A scanner that changes its beam layout mid-run is not driven on: the watchdog stops the robot."""
+    core = DriveCore(table=load_table(keep_left), limits=Limits(0.4, 1.0), inputs=Inputs())
+    geom = SensorParams().laser.geometry
+    tick = core.scan(SCAN(orjson.dumps(msg.laser_scan(1, np.full(geom.count, 3.0), geom))), 0.0)
+    assert isinstance(tick, Tick) and not core.watchdog.blind(0.4)
+    other = replace(geom, count=geom.count - 10)
+    for k in range(2, 10):
+        t = k * 100_000_000
+        skip = core.scan(SCAN(orjson.dumps(msg.laser_scan(t, np.full(other.count, 3.0), other))), 0.1 * k)
+        assert isinstance(skip, Skip) and skip.warn and "beam geometry" in skip.reason
+    assert core.watchdog.blind(0.9)

@@ -38,6 +38,8 @@ def test_watchdog_fresh_stale_and_blind() -> None:
     wd = Watchdog(max_age_s=0.5)
     assert wd.blind(0.0)  # nothing yet
     assert wd.scan(1_000_000_000, 10.0) == ""
+    assert wd.blind(10.0)  # fresh, but not yet used for a command
+    wd.commanded(10.0)
     assert not wd.blind(10.4) and wd.blind(10.51)
     assert "does not advance" in wd.scan(1_000_000_000, 10.1)
     assert wd.scan(1_100_000_000, 10.1) == ""
