@@ -516,8 +516,11 @@ def drive(
     stopper: Stopper | None = None,
 ) -> DriveSummary:
     """Run the table live against ``opts.url`` (see the module docstring); record ``out``."""
+    if not opts.url.startswith(("ws://", "wss://")):
+        raise DriveError(f"--connect must be a ws://HOST:PORT URL, got {opts.url!r}")
     if opts.duration_s is not None and not (opts.duration_s > 0 and math.isfinite(opts.duration_s)):
         raise DriveError("--duration must be a positive number of seconds")
+    limits_of(opts.table.estimated_by, max_speed=opts.max_speed, max_turn=opts.max_turn)  # before any output
     stopper = stopper or Stopper()
     meta = {
         "tool": "lfdfuse",
