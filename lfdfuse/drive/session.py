@@ -93,6 +93,7 @@ class DriveSummary:
     connections: int
     duration_s: float
     latency_ms: tuple[float, float] | None  # p50, p99 (scan arrival → command sent/computed)
+    latencies_ms: tuple[float, ...]  # every tick's, in order
     agreement_deg: float | None  # --shadow: mean §12 heading error against the robot's commands
     agreement_ticks: int
     odometry_m: float  # path length by odometry
@@ -571,6 +572,7 @@ def drive(
         connections=s.connections,
         duration_s=time.monotonic() - t0,
         latency_ms=lat,
+        latencies_ms=tuple(s.latencies),
         agreement_deg=agree.mean_deg if agree is not None and agree.errors_deg else None,
         agreement_ticks=len(agree.errors_deg) if agree is not None else 0,
         odometry_m=s.odometry_m,

@@ -24,7 +24,6 @@ import numpy as np
 
 from lfdfuse.drive.session import DriveOptions, Stopper, drive
 from lfdfuse.evaluate.roundtrip import load_truth
-from lfdfuse.log.reader import iter_messages
 
 GOAL_P99_MS = 10.0
 
@@ -65,17 +64,6 @@ def _robot(kind: str, seconds: float) -> tuple[subprocess.Popen[str], str]:
             return proc, m.group(0)
 
 
-def _latencies(path: Path) -> np.ndarray:
-    import orjson
-
-    out = [
-        orjson.loads(d)["latency_ms"]
-        for _, _, _, d in iter_messages(path, topics=["/lfd/command"])
-        if orjson.loads(d)["source"] == "network"
-    ]
-    return np.array(out, dtype=np.float64)
-
-
 def run(quick: bool = False) -> list[dict[str, Any]]:
     seconds = 8.0 if quick else 30.0
     table, _ = load_truth("tee-left")
@@ -97,7 +85,7 @@ def run(quick: bool = False) -> list[dict[str, Any]]:
                     out=out,
                     stopper=stopper,
                 )
-                lat = _latencies(out)
+                lat = np.array(s.latencies_ms)
                 wall = time.monotonic() - t0
         finally:
             proc.terminate()

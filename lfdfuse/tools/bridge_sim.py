@@ -32,15 +32,16 @@ import numpy as np
 import orjson
 from foxglove import Channel, Context, Schema
 from foxglove.websocket import Capability, ChannelView, Client, ClientChannel, ServerListener
-from mcap.reader import make_reader
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from lfdfuse.log import messages as msg
+from lfdfuse.log.reader import iter_raw
 from lfdfuse.log.schemas import schema_text
 from lfdfuse.sim.loop import side_beam_index
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.sim.simulator import Observation, Simulator
+from lfdfuse.sources.teleop.inputs import parse_twist
 from lfdfuse.world.model import World
 
 _STORE = get_typestore(Stores.ROS2_HUMBLE)
@@ -95,8 +96,7 @@ class _Listener(ServerListener):
                 m: Any = _STORE.deserialize_cdr(bytes(data), "geometry_msgs/msg/Twist")
                 v, w = float(m.linear.x), float(m.angular.z)
             else:
-                d = orjson.loads(bytes(data))
-                v, w = float(d["linear"]["x"]), float(d["angular"]["z"])
+                v, w = parse_twist(bytes(data))
         except Exception:  # a test rig counts what it cannot read
             self.bad += 1
             return
@@ -343,26 +343,25 @@ class BagReplay:
             server_listener=self.listener,
             context=self.context,
         )
-        self.channels: dict[int, Channel] = {}
-        self.messages: list[tuple[int, int, bytes]] = []  # (log time, channel id, data)
-        static: list[tuple[int, bytes]] = []
-        with self.path.open("rb") as f:
-            reader = make_reader(f)
-            for schema, channel, message in reader.iter_messages(log_time_order=True):
-                if channel.topic not in ("/scan", "/odom", "/tf", "/tf_static", "/cmd_vel"):
-                    continue
-                if channel.id not in self.channels:
-                    assert schema is not None
-                    get_types_from_msg(schema.data.decode(), schema.name)  # the bag's own definitions parse
-                    self.channels[channel.id] = Channel(
-                        channel.topic,
-                        schema=Schema(name=schema.name, encoding=schema.encoding, data=schema.data),
-                        message_encoding=channel.message_encoding,
-                        context=self.context,
-                    )
-                if channel.topic == "/tf_static":
-                    static.append((channel.id, message.data))
-                self.messages.append((message.log_time, channel.id, message.data))
+        self.channels: dict[str, Channel] = {}
+        self.messages: list[tuple[int, str, bytes]] = []  # (log time, topic, data)
+        static: list[tuple[str, bytes]] = []
+        for raw in iter_raw(self.path):
+            if raw.topic not in ("/scan", "/odom", "/tf", "/tf_static", "/cmd_vel"):
+                continue
+            if raw.topic not in self.channels:
+                get_types_from_msg(
+                    raw.schema_data.decode(), raw.schema_name
+                )  # the bag's own definitions parse
+                self.channels[raw.topic] = Channel(
+                    raw.topic,
+                    schema=Schema(name=raw.schema_name, encoding=raw.schema_encoding, data=raw.schema_data),
+                    message_encoding=raw.message_encoding,
+                    context=self.context,
+                )
+            if raw.topic == "/tf_static":
+                static.append((raw.topic, raw.data))
+            self.messages.append((raw.log_time_ns, raw.topic, raw.data))
         self.static = static
 
     @property
@@ -384,17 +383,16 @@ class BagReplay:
             return 0
         t0, wall0 = self.messages[0][0], time.monotonic()
         next_static = 0
-        for i, (t, cid, data) in enumerate(self.messages):
+        for t, topic, data in self.messages:
             due = wall0 + (t - t0) / 1e9 / self.speed
             delay = due - time.monotonic()
             if delay > 0:
                 time.sleep(delay)
             if t >= next_static:  # latched transforms, repeated for a late subscriber
-                for scid, sdata in self.static:
-                    self.channels[scid].log(sdata, log_time=t)
+                for stopic, sdata in self.static:
+                    self.channels[stopic].log(sdata, log_time=t)
                 next_static = t + 1_000_000_000
-            self.channels[cid].log(data, log_time=t)
-            del i
+            self.channels[topic].log(data, log_time=t)
         return len(self.messages)
 
     def close(self) -> None:
