@@ -17,6 +17,7 @@ nothing is sent while it is down. The library never prints: ``notify`` gets one-
 from __future__ import annotations
 
 import asyncio
+import gc
 import math
 import signal
 import socket
@@ -324,6 +325,9 @@ class _Session:
         self.core = DriveCore(table=self.opts.table, limits=self.limits, inputs=inputs)
         if self.log is not None:
             self.recorder = LiveRecorder(self.log, self.core, shadow=self.opts.shadow)
+        # everything loaded so far (type stores, the table, numpy) lives as long as the run: out of
+        # the collector's way, so a full collection does not stall a tick
+        gc.freeze()
 
     async def _record(self, ws: Any, st: _Conn, role: Role, rec: Any, arrived: float) -> None:
         core = self.core

@@ -157,3 +157,22 @@ def test_drive_the_real_teleop_server_then_sigterm(keep_left: Path, tmp_path: Pa
     scans = [json.loads(d)["ranges"] for _, _, _, d in iter_messages(demo, topics=["/scan"])]
     left, right = np.array([(r[-1], r[0]) for r in scans[10:]]).T
     assert np.mean(left) < np.mean(right)
+
+
+def test_commands_never_exceed_the_clamp(keep_left: Path) -> None:
+    with BridgeSim(load_world("tee"), encoding="cdr", lockstep=True) as robot:
+        live = start_drive(load_table(keep_left), robot.url, max_speed=0.15, max_turn=0.5)
+
+        def ten_seconds() -> None:
+            assert robot.wait_for_subscriber()
+            robot.run(10.0)
+            live.stopper.stop("robot done")
+
+        th = in_thread(ten_seconds)
+        s = live.join(60)
+        th.join(5)
+    v = np.array([r.v_mps for r in robot.received])
+    w = np.array([r.omega_rps for r in robot.received])
+    assert len(v) >= 95 and np.all(np.abs(v) <= 0.15) and np.all(np.abs(w) <= 0.5)
+    assert v.max() == pytest.approx(0.15, abs=1e-4) and s.limits.v_max_mps == 0.15  # it drives at the clamp
+    assert _path_m(robot.poses) > 1.0 and robot.collisions == 0
