@@ -35,10 +35,10 @@ from websockets.exceptions import ConnectionClosed, InvalidHandshake, InvalidURI
 
 from lfdfuse import __version__
 from lfdfuse.drive import wire
+from lfdfuse.drive.channels import Subscriptions, Topics
 from lfdfuse.drive.core import Applicability, DriveCore, Inputs, Skip, applicability, check_applicable
 from lfdfuse.drive.decode import (
     DecodeError,
-    Decoder,
     LiveOdom,
     LiveScan,
     LiveTargets,
@@ -46,8 +46,6 @@ from lfdfuse.drive.decode import (
     LiveTwist,
     Role,
     TwistEncoder,
-    decoder_for,
-    role_of,
     twist_encoder,
 )
 from lfdfuse.drive.record import LiveRecorder
@@ -95,6 +93,7 @@ class DriveSummary:
     duration_s: float
     latency_ms: tuple[float, float] | None  # p50, p99 (scan arrival → command sent/computed)
     latencies_ms: tuple[float, ...]  # every tick's, in order
+    cpu_ms: tuple[float, ...]  # the CPU time this thread spent over each tick's latency
     agreement_deg: float | None  # --shadow: mean §12 heading error against the robot's commands
     agreement_ticks: int
     odometry_m: float  # path length by odometry
@@ -149,6 +148,8 @@ class _Session:
         self.recorder: LiveRecorder | None = None
         self.app: Applicability | None = None
         self.latencies: list[float] = []
+        self.cpu: list[float] = []
+        self._arrived_cpu = 0.0
         self.sent = self.zeros = self.connections = 0
         self.warned: Counter[str] = Counter()
         self.encoder: TwistEncoder | None = None
@@ -166,7 +167,8 @@ class _Session:
     # -- one connection ---------------------------------------------------------------------
     async def connection(self, ws: Any, stop: asyncio.Event) -> None:
         """Serve one open connection until ``stop`` or the connection drops (:class:`_Lost`)."""
-        st = _Conn()
+        o = self.opts
+        st = _Conn(Subscriptions(Topics(o.scan_topic, o.odom_topic, o.cmd_topic, o.shadow)))
         watchdog = asyncio.create_task(self._watchdog(ws, st, stop))
         try:
             advertised_by = time.monotonic() + ADVERTISE_TIMEOUT_S
@@ -174,7 +176,7 @@ class _Session:
             stopping = asyncio.create_task(stop.wait())
             while not stop.is_set():
                 recv = asyncio.ensure_future(ws.recv())
-                timeout = max(0.0, advertised_by - time.monotonic()) if st.scan_sub is None else None
+                timeout = None if st.subs.scan else max(0.0, advertised_by - time.monotonic())
                 done, _ = await asyncio.wait(
                     {recv, stopping}, timeout=timeout, return_when=asyncio.FIRST_COMPLETED
                 )
@@ -184,7 +186,7 @@ class _Session:
                 if recv not in done:
                     recv.cancel()
                     if self.connections == 1:
-                        names = ", ".join(sorted(c.topic for c in st.channels.values())) or "none"
+                        names = ", ".join(st.subs.advertised_topics()) or "none"
                         raise DriveError(
                             f"the server advertises no scan on {self.opts.scan_topic} (it has: {names})"
                         )
@@ -194,7 +196,7 @@ class _Session:
                     frame = recv.result()
                 except ConnectionClosed as exc:
                     raise _Lost(str(exc)) from None
-                arrived = time.perf_counter()
+                arrived, self._arrived_cpu = time.perf_counter(), time.thread_time()
                 quick_ack(ws)
                 await self._frame(ws, st, frame, arrived)
             stopping.cancel()
@@ -218,16 +220,15 @@ class _Session:
             self.warn("wire", f"{exc}; ignored")
             return
         if isinstance(ev, wire.MessageData):
-            sub = st.subs.get(ev.subscription)
+            sub = st.subs.subs.get(ev.subscription)
             if sub is None:
                 return
-            role, decode, topic = sub
             try:
-                rec = decode(ev.payload)
+                rec = sub.decode(ev.payload)
             except DecodeError as exc:
-                self.warn(f"decode {topic}", f"{topic}: {exc}; ignored (further ones counted)")
+                self.warn(f"decode {sub.topic}", f"{sub.topic}: {exc}; ignored (further ones counted)")
                 return
-            await self._record(ws, st, role, rec, arrived)
+            await self._record(ws, st, sub.role, rec, arrived)
         elif isinstance(ev, wire.ServerInfo):
             st.info = ev
             if not self.opts.shadow:
@@ -242,66 +243,19 @@ class _Session:
         elif isinstance(ev, list):
             await self._advertised(ws, st, ev)
         elif isinstance(ev, wire.Unadvertise):
-            for cid in ev.ids:
-                st.channels.pop(cid, None)
-                for s, (_, _, _) in list(st.subs.items()):
-                    if st.sub_channel.get(s) == cid:
-                        del st.subs[s]
-                        if s == st.scan_sub:
-                            st.scan_sub = None
+            st.subs.unadvertised(ev.ids)
         elif isinstance(ev, wire.Status) and ev.level >= 1:
             self.warn(f"status {ev.message}", f"the server says: {ev.message}")
 
-    def _wanted(self, ch: wire.ServerChannel, st: _Conn) -> Role | None:
-        role = role_of(ch)
-        o = self.opts
-        if role is Role.SCAN:
-            return role if ch.topic == o.scan_topic else None
-        if role is Role.ODOM:
-            # the named topic, else the first odometry-like channel (lfdfuse's server calls it /pose)
-            if ch.topic == o.odom_topic or (st.odom_sub is None and o.odom_topic not in st.topics()):
-                return role
-            return None
-        if role is Role.TF or role is Role.TARGETS:
-            return role
-        if role is Role.CMD:
-            return role if o.shadow and ch.topic == o.cmd_topic else None
-        return None
-
     async def _advertised(self, ws: Any, st: _Conn, channels: list[wire.ServerChannel]) -> None:
-        for ch in channels:
-            st.channels[ch.id] = ch
-        pairs: list[tuple[int, int]] = []
-        for ch in sorted(channels, key=lambda c: (c.topic != self.opts.odom_topic, c.id)):
-            role = self._wanted(ch, st)
-            if role is None or ch.id in st.sub_channel.values():
-                continue
-            try:
-                decode = decoder_for(ch)
-            except DecodeError as exc:
-                self.warn(f"schema {ch.topic}", f"{exc}; not subscribed")
-                continue
-            st.next_sub += 1
-            sub = st.next_sub
-            st.subs[sub] = (role, decode, ch.topic)
-            st.sub_channel[sub] = ch.id
-            if role is Role.SCAN:
-                st.scan_sub = sub
-            if role is Role.ODOM:
-                st.odom_sub = sub
-            if role is Role.TARGETS:
-                st.camera = True
-            pairs.append((sub, ch.id))
+        pairs, warnings = st.subs.advertised(channels)
+        for text in warnings:
+            self.warn(text, text)
         if pairs:
             await ws.send(wire.subscribe(pairs))
-        if st.scan_sub is not None and self.core is None:
+        if st.subs.scan and self.core is None:
             self._start_core(st)
-        if (
-            st.scan_sub is not None
-            and not self.opts.shadow
-            and not st.advertised
-            and self.encoder is not None
-        ):
+        if st.subs.scan and not self.opts.shadow and not st.advertised and self.encoder is not None:
             enc = self.encoder
             await ws.send(
                 wire.advertise(
@@ -316,7 +270,7 @@ class _Session:
             await self._send_zero(ws, st, source="stale")  # a new connection starts standing still
 
     def _start_core(self, st: _Conn) -> None:
-        inputs = Inputs(camera=st.camera)
+        inputs = Inputs(camera=st.subs.camera)
         app = applicability(self.opts.table, inputs)
         check_applicable(app)
         self.app = app
@@ -346,6 +300,7 @@ class _Session:
                 self.sent += 1
             latency = (time.perf_counter() - arrived) * 1e3
             self.latencies.append(latency)
+            self.cpu.append((time.thread_time() - self._arrived_cpu) * 1e3)
             if self._blind_noted:
                 self.notify("scans are back: driving")
                 self._blind_noted = False
@@ -475,19 +430,10 @@ class _Session:
 class _Conn:
     """What one connection has learnt."""
 
+    subs: Subscriptions
     info: wire.ServerInfo | None = None
-    channels: dict[int, wire.ServerChannel] = field(default_factory=dict)
-    subs: dict[int, tuple[Role, Decoder, str]] = field(default_factory=dict)
-    sub_channel: dict[int, int] = field(default_factory=dict)
-    next_sub: int = 0
-    scan_sub: int | None = None
-    odom_sub: int | None = None
-    camera: bool = False
     advertised: bool = False
     last_zero_s: float = -math.inf
-
-    def topics(self) -> set[str]:
-        return {c.topic for c in self.channels.values()}
 
 
 def quick_ack(ws: Any) -> None:
@@ -577,6 +523,7 @@ def drive(
         duration_s=time.monotonic() - t0,
         latency_ms=lat,
         latencies_ms=tuple(s.latencies),
+        cpu_ms=tuple(s.cpu),
         agreement_deg=agree.mean_deg if agree is not None and agree.errors_deg else None,
         agreement_ticks=len(agree.errors_deg) if agree is not None else 0,
         odometry_m=s.odometry_m,

@@ -5,13 +5,16 @@ Two robots, each its own process, so the server's threads do not share our inter
 :mod:`lfdfuse.tools.bridge_sim` (CDR, ``ros2msg`` schemas, the laser mounted by tf, as
 ``foxglove_bridge`` streams it). ``drive`` runs the hand-written ``tee-left`` truth table
 against each in this process and records to a temporary MCAP, as a user's run would. One row
-per robot: ticks, latency p50 / p99 / max (ms) and whether p99 meets the goal (< 10 ms).
+per robot: ticks, latency p50 / p99 / max (ms), whether p99 meets the goal (< 10 ms), and the
+CPU time drive's thread spent over the same spans (p50 / p99) with the machine's load average:
+on a loaded machine the wall-clock tail is time spent waiting for a core, not work.
 
     python -m lfdfuse.tools.bench --suite drive [--quick]
 """
 
 from __future__ import annotations
 
+import os
 import re
 import subprocess
 import sys
@@ -99,9 +102,13 @@ def run(quick: bool = False) -> list[dict[str, Any]]:
                 "p50_ms": p50,
                 "p99_ms": p99,
                 "max_ms": float(lat.max()) if len(lat) else float("nan"),
+                # the CPU this thread spent over the same spans: wall minus CPU is waiting for a core
+                "cpu_p50_ms": float(np.percentile(s.cpu_ms, 50)) if s.cpu_ms else float("nan"),
+                "cpu_p99_ms": float(np.percentile(s.cpu_ms, 99)) if s.cpu_ms else float("nan"),
                 "goal_p99_ms": GOAL_P99_MS,
                 "meets_goal": bool(p99 < GOAL_P99_MS),
                 "odometry_m": s.odometry_m,
+                "load_avg_1m": os.getloadavg()[0],
             }
         )
     return rows
