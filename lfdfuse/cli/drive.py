@@ -61,8 +61,8 @@ def drive_cmd(
 
     Try --shadow first: the robot is driven by a person (or its own controller) and drive
     only reports how well the network agrees. A zero Twist is sent when scans stop for 0.5 s
-    and on every exit (Ctrl-C, SIGTERM, --duration, a lost connection); drive reconnects with
-    back-off while --duration lasts.
+    and on every exit (Ctrl-C, SIGTERM, --duration, an error); a lost connection is retried
+    with back-off while --duration lasts, and a new connection starts with a zero Twist.
 
     Examples:
       lfdfuse drive fusion.yaml --connect ws://robot:8765 --shadow -o shadow.mcap
