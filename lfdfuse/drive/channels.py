@@ -50,6 +50,13 @@ class Subscriptions:
         """A channel of target detections is subscribed (the robot has a camera)."""
         return any(s.role is Role.TARGETS for s in self.subs.values())
 
+    def stamped_cmd(self) -> bool:
+        """The robot's command topic is advertised as ``TwistStamped``: send that type too."""
+        return any(
+            c.topic == self.topics.cmd and c.schema_name.endswith("TwistStamped")
+            for c in self.channels.values()
+        )
+
     def advertised_topics(self) -> list[str]:
         return sorted(c.topic for c in self.channels.values())
 

@@ -32,6 +32,7 @@ from lfdfuse.sources.importers.records import ScanRecord, no_return
 from lfdfuse.sources.teleop.inputs import TwistError, parse_twist
 
 TWIST = "geometry_msgs/msg/Twist"
+TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
 #: lfdfuse's JSON scans carry no max range: they come from the simulated laser
 JSON_MAX_RANGE_M = LaserParams().max_range_m
 
@@ -56,11 +57,13 @@ KNOWN: dict[tuple[str, str], Role] = {
     ("cdr", "nav_msgs/msg/Odometry"): Role.ODOM,
     ("cdr", "tf2_msgs/msg/TFMessage"): Role.TF,
     ("cdr", TWIST): Role.CMD,
+    ("cdr", TWIST_STAMPED): Role.CMD,
     ("json", "foxglove.LaserScan"): Role.SCAN,
     ("json", "foxglove.PoseInFrame"): Role.ODOM,
     ("json", "foxglove.FrameTransform"): Role.TF,
     ("json", "geometry_msgs/Twist"): Role.CMD,
     ("json", TWIST): Role.CMD,
+    ("json", TWIST_STAMPED): Role.CMD,
     ("json", "lfdfuse.Twist"): Role.CMD,
     ("json", "lfdfuse.TargetDetections"): Role.TARGETS,
 }
@@ -197,7 +200,8 @@ def _cdr_tf(m: Any) -> LiveTf:
 
 
 def _cdr_twist(m: Any) -> LiveTwist:
-    v, w = float(m.linear.x), float(m.angular.z)
+    tw = getattr(m, "twist", m)  # TwistStamped or Twist
+    v, w = float(tw.linear.x), float(tw.angular.z)
     if not (math.isfinite(v) and math.isfinite(w)):
         raise DecodeError("a Twist that is not finite")
     return LiveTwist(v, w)
@@ -286,35 +290,52 @@ def decoder_for(ch: ServerChannel) -> Decoder:
 
 @dataclass(frozen=True)
 class TwistEncoder:
-    """``geometry_msgs/msg/Twist`` in one encoding: its schema text and the payload of a command."""
+    """The command we send in one encoding and type: its schema text and ``encode(v, ω, t_ns)``.
+
+    ``t_ns`` (the robot's clock) stamps a ``TwistStamped``; a plain ``Twist`` has no stamp.
+    """
 
     encoding: str  # cdr | json
-    schema_name: str
+    schema_name: str  # geometry_msgs/msg/Twist or geometry_msgs/msg/TwistStamped
     schema: str
-    encode: Callable[[float, float], bytes]
+    encode: Callable[[float, float, int], bytes]
 
 
-def twist_encoder(supported: tuple[str, ...]) -> TwistEncoder:
-    """CDR when the server takes it (a ROS 2 bridge), else JSON (lfdfuse's own server).
+def twist_encoder(supported: tuple[str, ...], *, stamped: bool = False) -> TwistEncoder:
+    """CDR when the server takes it (a ROS 2 bridge), else JSON (lfdfuse's own server);
+    ``geometry_msgs/msg/TwistStamped`` when ``stamped`` (a robot whose command topic has that
+    type: ROS 2 Jazzy's Nav2 and TurtleBot 4), else ``geometry_msgs/msg/Twist``.
 
     An empty list (an old server that does not say) means CDR: what foxglove_bridge takes.
     """
+    name = TWIST_STAMPED if stamped else TWIST
     if "cdr" in supported or not supported:
         store = get_typestore(Stores.ROS2_HUMBLE)
-        text, _ = store.generate_msgdef(TWIST)
-        t, vec = store.types[TWIST], store.types["geometry_msgs/msg/Vector3"]
+        text, _ = store.generate_msgdef(name)
+        T = store.types
+        twist, vec = T[TWIST], T["geometry_msgs/msg/Vector3"]
 
-        def cdr(v: float, w: float) -> bytes:
-            return bytes(store.serialize_cdr(t(vec(v, 0.0, 0.0), vec(0.0, 0.0, w)), TWIST))
+        def cdr(v: float, w: float, t_ns: int) -> bytes:
+            msg = twist(vec(v, 0.0, 0.0), vec(0.0, 0.0, w))
+            if stamped:
+                t_ns = max(t_ns, 0)
+                stamp = T["builtin_interfaces/msg/Time"](t_ns // 1_000_000_000, t_ns % 1_000_000_000)
+                msg = T[TWIST_STAMPED](T["std_msgs/msg/Header"](stamp, ROBOT_FRAME), msg)
+            return bytes(store.serialize_cdr(msg, name))
 
-        return TwistEncoder("cdr", TWIST, text, cdr)
+        return TwistEncoder("cdr", name, text, cdr)
     if "json" in supported:
 
-        def js(v: float, w: float) -> bytes:
+        def js(v: float, w: float, t_ns: int) -> bytes:
             zero = {"x": 0.0, "y": 0.0, "z": 0.0}
-            return orjson.dumps({"linear": {**zero, "x": v}, "angular": {**zero, "z": w}})
+            msg: dict[str, Any] = {"linear": {**zero, "x": v}, "angular": {**zero, "z": w}}
+            if stamped:
+                t_ns = max(t_ns, 0)
+                stamp = {"sec": t_ns // 1_000_000_000, "nanosec": t_ns % 1_000_000_000}
+                msg = {"header": {"stamp": stamp, "frame_id": ROBOT_FRAME}, "twist": msg}
+            return orjson.dumps(msg)
 
-        return TwistEncoder("json", TWIST, "", js)
+        return TwistEncoder("json", name, "", js)
     raise DecodeError(
         f"the server takes neither CDR nor JSON from clients (it takes: {', '.join(supported)})"
     )

@@ -6,7 +6,8 @@ on a robot, or ``lfdfuse teleop --input foxglove``) until ``--duration``, a sign
 encoding of our Twist (CDR when it takes it, else JSON); its ``advertise`` messages name the
 channels, of which it subscribes the scan, the odometry, tf, a camera's targets and, in
 ``--shadow``, the robot's own command; once the scan is advertised it advertises the command
-channel (not in ``--shadow``: nothing is published). Each scan frame is decoded, handed to the
+channel — ``geometry_msgs/msg/TwistStamped`` when the server advertises the command topic with
+that type, else ``Twist`` (not in ``--shadow``: nothing is published). Each scan frame is decoded, handed to the
 :class:`~lfdfuse.drive.core.DriveCore` and its command sent at once, in the same task — the
 scan → command latency is decoding plus one network tick. A watchdog task sends a zero Twist
 every period while no fresh scan came for 0.5 s. Every exit path with an open connection sends
@@ -157,6 +158,14 @@ class _Session:
         self._last_odom: LiveOdom | None = None
         self._blind_noted = False
         self._last_status = 0.0
+        self._robot_clock: tuple[int, float] | None = None  # (stamp, monotonic s) of the last tick
+
+    def _robot_now_ns(self) -> int:
+        """The robot's clock now, from the last scan's stamp (our epoch clock before any)."""
+        if self._robot_clock is None:
+            return time.time_ns()
+        t_ns, at = self._robot_clock
+        return t_ns + int((time.monotonic() - at) * 1e9)
 
     # -- notes ------------------------------------------------------------------------------
     def warn(self, key: str, text: str) -> None:
@@ -233,7 +242,7 @@ class _Session:
             st.info = ev
             if not self.opts.shadow:
                 try:
-                    self.encoder = twist_encoder(ev.encodings)
+                    twist_encoder(ev.encodings)  # can we send at all? (the type is chosen later)
                 except DecodeError as exc:
                     raise DriveError(str(exc)) from None
                 if "clientPublish" not in ev.capabilities:
@@ -255,8 +264,8 @@ class _Session:
             await ws.send(wire.subscribe(pairs))
         if st.subs.scan and self.core is None:
             self._start_core(st)
-        if st.subs.scan and not self.opts.shadow and not st.advertised and self.encoder is not None:
-            enc = self.encoder
+        if st.subs.scan and not self.opts.shadow and not st.advertised and st.info is not None:
+            enc = self.encoder = twist_encoder(st.info.encodings, stamped=st.subs.stamped_cmd())
             await ws.send(
                 wire.advertise(
                     channel_id=_OUR_CHANNEL,
@@ -296,8 +305,10 @@ class _Session:
                 return
             latency: float | None = None
             if not self.opts.shadow and st.advertised and self.encoder is not None:
-                await ws.send(wire.client_message(_OUR_CHANNEL, self.encoder.encode(*res.network)))
+                payload = self.encoder.encode(*res.network, rec.record.t_ns)
+                await ws.send(wire.client_message(_OUR_CHANNEL, payload))
                 self.sent += 1
+            self._robot_clock = (rec.record.t_ns, time.monotonic())
             latency = (time.perf_counter() - arrived) * 1e3
             self.latencies.append(latency)
             self.cpu.append((time.thread_time() - self._arrived_cpu) * 1e3)
@@ -339,7 +350,7 @@ class _Session:
     async def _send_zero(self, ws: Any, st: _Conn, *, source: str) -> None:
         if self.opts.shadow or not st.advertised or self.encoder is None:
             return
-        await ws.send(wire.client_message(_OUR_CHANNEL, self.encoder.encode(0.0, 0.0)))
+        await ws.send(wire.client_message(_OUR_CHANNEL, self.encoder.encode(0.0, 0.0, self._robot_now_ns())))
         self.sent += 1
         self.zeros += 1
         if self.recorder is not None:
@@ -528,7 +539,7 @@ def drive(
         agreement_ticks=len(agree.errors_deg) if agree is not None else 0,
         odometry_m=s.odometry_m,
         ended=ended,
-        encoding="" if opts.shadow or s.encoder is None else s.encoder.encoding,
+        encoding="" if opts.shadow or s.encoder is None else f"{s.encoder.encoding} {s.encoder.schema_name}",
         limits=s.limits,
         limits_from=s.limits_from,
         mount_from=core.mount_from if core is not None else "",

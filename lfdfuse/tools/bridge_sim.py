@@ -72,6 +72,7 @@ class _Listener(ServerListener):
         self.channels: dict[tuple[int, int], ClientChannel] = {}
         self.subscribed: set[str] = set()
         self.commands: queue.Queue[tuple[float, float, float, str]] = queue.Queue()
+        self.stamps: list[int] = []  # header stamps of TwistStamped commands
         self.bad = 0
 
     def on_subscribe(self, client: Client, channel: ChannelView) -> None:
@@ -93,7 +94,13 @@ class _Listener(ServerListener):
             return
         try:
             if ch.encoding == "cdr":
-                m: Any = _STORE.deserialize_cdr(bytes(data), "geometry_msgs/msg/Twist")
+                name = (
+                    ch.schema_name if ch.schema_name.endswith("TwistStamped") else "geometry_msgs/msg/Twist"
+                )
+                m: Any = _STORE.deserialize_cdr(bytes(data), name)
+                if name.endswith("TwistStamped"):
+                    self.stamps.append(int(m.header.stamp.sec) * 1_000_000_000 + int(m.header.stamp.nanosec))
+                    m = m.twist
                 v, w = float(m.linear.x), float(m.angular.z)
             else:
                 v, w = parse_twist(bytes(data))
@@ -179,6 +186,8 @@ class BridgeSim:
     port: int = 0
     seed: int = 0
     command_timeout_s: float = 1.0  # lockstep: how long a scan waits for its command
+    #: cdr: the robot's command topic is TwistStamped (ROS 2 Jazzy), advertised as a bridge would
+    cmd_stamped: bool = False
     received: list[Received] = field(default_factory=list)
     poses: list[tuple[float, float, float]] = field(default_factory=list)
     sides: list[tuple[float, float]] = field(default_factory=list)  # laser range at +90°, −90°
@@ -201,6 +210,14 @@ class BridgeSim:
                 )
                 for t, n in CDR_TOPICS.items()
             }
+            if self.cmd_stamped:
+                n = "geometry_msgs/msg/TwistStamped"
+                self.channels["/cmd_vel"] = Channel(
+                    "/cmd_vel",
+                    schema=Schema(name=n, encoding="ros2msg", data=_STORE.generate_msgdef(n)[0].encode()),
+                    message_encoding="cdr",
+                    context=self.context,
+                )
         else:
             self.channels = {
                 t: Channel(

@@ -56,7 +56,7 @@ def test_keep_left_learned_in_building_drives_tee_over_the_wire(
     left, right = np.array(robot.sides).T
     assert np.mean(left) < 0.7 * np.mean(right), "keeps left"
     assert {r.encoding for r in robot.received} == {encoding}
-    assert s.encoding == encoding and s.ticks >= 590 and s.latency_ms is not None
+    assert s.encoding == f"{encoding} geometry_msgs/msg/Twist" and s.ticks >= 590 and s.latency_ms is not None
     if encoding == "cdr":  # the scanner faces the robot's left: only tf says so
         assert s.mount_from == "tf (base_link → laser)"
         assert "attract_red" in (s.behaviors.missing if s.behaviors else {})
@@ -176,3 +176,27 @@ def test_commands_never_exceed_the_clamp(keep_left: Path) -> None:
     assert len(v) >= 95 and np.all(np.abs(v) <= 0.15) and np.all(np.abs(w) <= 0.5)
     assert v.max() == pytest.approx(0.15, abs=1e-4) and s.limits.v_max_mps == 0.15  # it drives at the clamp
     assert _path_m(robot.poses) > 1.0 and robot.collisions == 0
+
+
+def test_a_twist_stamped_robot_gets_twist_stamped(keep_left: Path) -> None:
+    """ROS 2 Jazzy robots take ``TwistStamped`` on /cmd_vel: drive sends the type advertised there,
+    stamped with the robot's clock (the scan's stamp)."""
+    with BridgeSim(load_world("tee"), encoding="cdr", lockstep=True, cmd_stamped=True) as robot:
+        live = start_drive(load_table(keep_left), robot.url)
+
+        def five_seconds() -> None:
+            assert robot.wait_for_subscriber()
+            robot.run(5.0)
+            live.stopper.stop("robot done")
+
+        th = in_thread(five_seconds)
+        s = live.join(60)
+        th.join(5)
+    assert s.encoding == "cdr geometry_msgs/msg/TwistStamped" and robot.listener.bad == 0
+    assert len(robot.received) >= 45 and _path_m(robot.poses) > 0.8
+    # zero Twists before the first scan (a new connection's, the watchdog's) carry our clock, as
+    # nothing else is known; every later command the robot's (the simulated robot's starts at 0)
+    stamps = robot.listener.stamps
+    k = next(i for i, t in enumerate(stamps) if t < 10**15)
+    assert 1 <= k <= 5 and all(t > 10**18 for t in stamps[:k])
+    assert stamps[k:] == sorted(stamps[k:]) and stamps[-1] <= 5_100_000_000

@@ -70,11 +70,27 @@ def test_cdr_odometry_and_tf(x: float, y: float, th: float) -> None:
 def test_twist_encoders_round_trip(v: float, w: float) -> None:
     cdr = twist_encoder(("cdr", "json"))
     assert cdr.encoding == "cdr" and "geometry_msgs/Vector3 linear" in cdr.schema
-    back = decoder_for(channel("geometry_msgs/msg/Twist"))(cdr.encode(v, w))
+    back = decoder_for(channel("geometry_msgs/msg/Twist"))(cdr.encode(v, w, 0))
     assert back == LiveTwist(v, w)
     js = twist_encoder(("json",))
     assert js.encoding == "json"
-    assert decoder_for(channel("geometry_msgs/msg/Twist", "json"))(js.encode(v, w)) == LiveTwist(v, w)
+    assert decoder_for(channel("geometry_msgs/msg/Twist", "json"))(js.encode(v, w, 0)) == LiveTwist(v, w)
+    for enc in (twist_encoder(("cdr",), stamped=True), twist_encoder(("json",), stamped=True)):
+        name = "geometry_msgs/msg/TwistStamped"
+        assert enc.schema_name == name
+        assert decoder_for(channel(name, enc.encoding))(enc.encode(v, w, 1_700_000_000_5)) == LiveTwist(v, w)
+
+
+def test_a_twist_stamped_carries_the_robot_clock() -> None:
+    enc = twist_encoder(("cdr",), stamped=True)
+    m = STORE.deserialize_cdr(
+        enc.encode(0.2, -0.1, 1_700_000_001_250_000_000), "geometry_msgs/msg/TwistStamped"
+    )
+    assert (m.header.stamp.sec, m.header.stamp.nanosec, m.header.frame_id) == (
+        1_700_000_001,
+        250_000_000,
+        "base_link",
+    )
 
 
 def test_twist_encoder_needs_cdr_or_json() -> None:
