@@ -3,6 +3,7 @@
 One module per job, data flowing down this list:
 
 * :mod:`~lfdfuse.drive.wire` — the Foxglove WebSocket protocol's frames, pure encode/decode;
+* :mod:`~lfdfuse.drive.channels` — which advertised channels to subscribe to, for which role;
 * :mod:`~lfdfuse.drive.decode` — CDR (``ros2msg`` schemas, ``rosbags``) and lfdfuse's own JSON
   into our small records, and the ``geometry_msgs/msg/Twist`` we send;
 * :mod:`~lfdfuse.drive.frames` — the laser mounting from tf, the scan in the base frame;
