@@ -72,7 +72,7 @@ class LogClock:
 
     def at_wall(self, wall_s: float) -> int:
         base = self._scan
-        t = base[0] + int((wall_s - base[1]) * 1e9) if base is not None else 0
+        t = base[0] + round((wall_s - base[1]) * 1e9) if base is not None else 0
         t = max(t, self.last_ns + 1, 0)
         self.last_ns = t
         return t
