@@ -4,6 +4,7 @@ from __future__ import annotations
 
 # every command module registers itself on the app when imported (one line each)
 from lfdfuse.cli import (
+    drive,  # noqa: F401
     estimate,  # noqa: F401
     evaluate,  # noqa: F401
     execute,  # noqa: F401

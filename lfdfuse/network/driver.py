@@ -24,7 +24,7 @@ from lfdfuse.network.runtime import Decision, NetworkRuntime, step_name_of
 from lfdfuse.network.table import FusionTable, Network
 from lfdfuse.sim.loop import side_beam_index
 from lfdfuse.sim.robot import RobotParams
-from lfdfuse.sim.sensors import SensorParams, target_reached
+from lfdfuse.sim.sensors import ScanGeometry, SensorParams, target_reached
 from lfdfuse.sim.simulator import Observation
 from lfdfuse.world.model import World
 
@@ -69,14 +69,17 @@ class NetworkDriver:
         self,
         *,
         table: FusionTable,
-        world: World,
+        world: World | None,
         sensors: SensorParams,
         rng: np.random.Generator,
         heading_noise_rad: float = 0.0,
         robot: RobotParams = RobotParams(),
         safety: SafetyParams | None = SafetyParams(),
+        geometry: ScanGeometry | None = None,
     ) -> None:
-        check_table_world(table, world)
+        # world None: a real robot (lfdfuse drive) — no map; targets only as its camera reports them
+        if world is not None:
+            check_table_world(table, world)
         self.table = table
         self.runtime = NetworkRuntime(table)
         self.sensors = sensors
@@ -84,8 +87,8 @@ class NetworkDriver:
         self.rng = rng
         self.noise = heading_noise_rad
         self.robot = robot
-        self.targets = world.target_names
-        self.geometry = sensors.laser.geometry
+        self.targets = world.target_names if world is not None else table.targets()
+        self.geometry = geometry or sensors.laser.geometry  # the laser's beam layout
         self.sonar_angles = sensors.sonar.geometry.angles
         self.reached: list[tuple[str, int]] = []
         self.ticks = 0
@@ -127,7 +130,7 @@ class NetworkDriver:
             geometry=self.geometry,
             detections=[reading.detections],
             target_names=self.targets,
-            sonar_m=reading.sonar_m[None, :],
+            sonar_m=reading.sonar_m[None, :] if len(reading.sonar_m) else None,  # a robot without sonar
             sonar_angles_rad=self.sonar_angles,
             sonar_max_m=self.sensors.sonar.max_range_m,
         )

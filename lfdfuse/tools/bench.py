@@ -27,6 +27,7 @@ SUITES = {
     "estimate": "lfdfuse.tools.bench_estimate",
     "offroute": "lfdfuse.tools.bench_offroute",
     "memory": "lfdfuse.tools.bench_memory",
+    "drive": "lfdfuse.tools.bench_drive",
 }
 
 app = typer.Typer(add_completion=False, pretty_exceptions_enable=False)

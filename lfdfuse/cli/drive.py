@@ -1,0 +1,127 @@
+"""``lfdfuse drive``: the learned network drives a live robot over the Foxglove WebSocket protocol."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import typer
+
+from lfdfuse.cli.app import app
+from lfdfuse.cli.common import check_outputs, console, err_console, user_errors
+from lfdfuse.drive.session import DriveOptions, DriveSummary, drive
+from lfdfuse.network.table import load_table
+
+
+@app.command("drive")
+@user_errors
+def drive_cmd(
+    table: Path = typer.Argument(..., help="A fusion table YAML (from `lfdfuse estimate`)."),
+    connect: str = typer.Option(
+        ...,
+        "--connect",
+        help="The robot's Foxglove WebSocket server, ws://HOST:PORT (foxglove_bridge, or `lfdfuse teleop --input foxglove`).",
+    ),
+    scan: str = typer.Option("/scan", "--scan", help="Laser scan topic."),
+    odom: str = typer.Option(
+        "/odom", "--odom", help="Odometry topic (else the first odometry-like channel, e.g. /pose)."
+    ),
+    cmd: str = typer.Option("/cmd_vel", "--cmd", help="Velocity command topic (geometry_msgs/msg/Twist)."),
+    shadow: bool = typer.Option(
+        False,
+        "--shadow",
+        help="Publish nothing: record what the network would command beside the robot's own --cmd, and print their agreement.",
+    ),
+    max_speed: float | None = typer.Option(
+        None,
+        "--max-speed",
+        min=0.01,
+        max=10.0,
+        help="Clamp the forward speed to this (m/s); default: the table's robot.",
+    ),
+    max_turn: float | None = typer.Option(
+        None,
+        "--max-turn",
+        min=0.01,
+        max=20.0,
+        help="Clamp the turn rate to this (rad/s); default: the table's robot.",
+    ),
+    duration: float | None = typer.Option(
+        None,
+        "--duration",
+        min=0.1,
+        max=86_400.0,
+        help="Stop after this many seconds (default: until Ctrl-C or SIGTERM).",
+    ),
+    out: Path | None = typer.Option(
+        None, "--out", "-o", help="Record the live run (MCAP): sensors received, /lfd/*, commands sent."
+    ),
+) -> None:
+    """Run a learned behaviour network live on a robot, at the robot's scan rate.
+
+    Try --shadow first: the robot is driven by a person (or its own controller) and drive
+    only reports how well the network agrees. A zero Twist is sent when scans stop for 0.5 s
+    and on every exit (Ctrl-C, SIGTERM, --duration, an error); a lost connection is retried
+    with back-off while --duration lasts, and a new connection starts with a zero Twist.
+
+    Examples:
+      lfdfuse drive fusion.yaml --connect ws://robot:8765 --shadow -o shadow.mcap
+      lfdfuse drive fusion.yaml --connect ws://robot:8765 --max-speed 0.2 -o live.mcap
+      lfdfuse drive fusion.yaml --connect ws://127.0.0.1:8765 --odom /pose --duration 60
+    """
+    check_outputs([out], [table])
+    tab = load_table(table)
+    opts = DriveOptions(
+        table=tab,
+        url=connect,
+        table_name=table.name,
+        scan_topic=scan,
+        odom_topic=odom,
+        cmd_topic=cmd,
+        shadow=shadow,
+        max_speed=max_speed,
+        max_turn=max_turn,
+        duration_s=duration,
+    )
+    err_console.print(
+        f"drive {table.name} → {connect}" + (" (shadow: publishing nothing)" if shadow else ""), markup=False
+    )
+    summary = drive(opts, out=out, notify=lambda line: err_console.print(line, markup=False, soft_wrap=True))
+    print_summary(summary, shadow=shadow)
+
+
+def print_summary(s: DriveSummary, *, shadow: bool) -> None:
+    lat = f"p50 {s.latency_ms[0]:.2f} ms, p99 {s.latency_ms[1]:.2f} ms" if s.latency_ms else "none"
+    console.print(
+        f"drive: {s.ticks} ticks in {s.duration_s:.1f} s; scan → command latency {lat}", markup=False
+    )
+    if shadow:
+        console.print("  sent        nothing (shadow)", markup=False)
+        if s.agreement_deg is not None:
+            console.print(
+                f"  agreement   {s.agreement_deg:.1f}° mean heading error over {s.agreement_ticks} informative ticks"
+                " (the network vs the robot's own commands)",
+                markup=False,
+            )
+        else:
+            console.print("  agreement   none: no informative command of the robot's own came", markup=False)
+    else:
+        console.print(
+            f"  sent        {s.sent} commands ({s.encoding}), {s.zeros} of them zero Twists", markup=False
+        )
+    console.print(f"  odometry    {s.odometry_m:.1f} m", markup=False)
+    console.print(
+        f"  limits      {s.limits.v_max_mps:.2f} m/s, {math.degrees(s.limits.omega_max_rps):.0f}°/s ({s.limits_from})",
+        markup=False,
+    )
+    if s.mount_from:
+        console.print(f"  laser       {s.mount_from}", markup=False)
+    for text, n in s.warnings.items():
+        if n > 1:
+            console.print(f"  warnings    {n}× {text}", markup=False)
+    console.print(
+        f"  ended       {s.ended}; {s.connections} connection{'s' if s.connections != 1 else ''}",
+        markup=False,
+    )
+    if s.out:
+        console.print(f"wrote {s.out}", markup=False)

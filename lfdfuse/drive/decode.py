@@ -1,0 +1,341 @@
+"""Messages off the wire into our own small records, and the Twist we send back.
+
+Two dialects (DESIGN §15): what ``foxglove_bridge`` sends — CDR with ``ros2msg`` schemas
+(``sensor_msgs/msg/LaserScan``, ``nav_msgs/msg/Odometry``, ``tf2_msgs/msg/TFMessage``,
+``geometry_msgs/msg/Twist``), deserialised by ``rosbags`` from the schema text the server
+advertises (no ROS install) — and what ``lfdfuse teleop --input foxglove`` sends: JSON
+``foxglove.LaserScan``, ``foxglove.PoseInFrame``, ``foxglove.FrameTransform`` and
+``lfdfuse.TargetDetections``, read by the log's own codecs. Nothing format-specific leaks out:
+every decoder returns a :class:`LiveScan`, :class:`LiveOdom`, :class:`LiveTf`,
+:class:`LiveTwist` or :class:`LiveTargets`, or raises :class:`DecodeError`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from enum import Enum
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+import orjson
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+from rosbags.typesys.store import Typestore
+
+from lfdfuse.drive.wire import ServerChannel
+from lfdfuse.log.messages import decode_detections, decode_pose, decode_scan, yaw_of
+from lfdfuse.log.stamps import ROBOT_FRAME, from_stamp
+from lfdfuse.sim.sensors import Detection, LaserParams
+from lfdfuse.sources.importers.records import ScanRecord, no_return
+from lfdfuse.sources.teleop.inputs import TwistError, parse_twist
+
+TWIST = "geometry_msgs/msg/Twist"
+TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
+#: lfdfuse's JSON scans carry no max range: they come from the simulated laser
+JSON_MAX_RANGE_M = LaserParams().max_range_m
+
+
+class DecodeError(ValueError):
+    """A message that cannot be decoded (the session warns once and goes on)."""
+
+
+class Role(Enum):
+    """What a channel is to ``drive``."""
+
+    SCAN = "scan"  #: the laser
+    ODOM = "odom"  #: odometry (only its increments are used)
+    TF = "tf"  #: transforms (the laser mounting)
+    CMD = "cmd"  #: the robot's own velocity commands (recorded in --shadow)
+    TARGETS = "targets"  #: a camera's target detections (lfdfuse's simulated robot)
+
+
+#: (message encoding, schema name) → role
+KNOWN: dict[tuple[str, str], Role] = {
+    ("cdr", "sensor_msgs/msg/LaserScan"): Role.SCAN,
+    ("cdr", "nav_msgs/msg/Odometry"): Role.ODOM,
+    ("cdr", "tf2_msgs/msg/TFMessage"): Role.TF,
+    ("cdr", TWIST): Role.CMD,
+    ("cdr", TWIST_STAMPED): Role.CMD,
+    ("json", "foxglove.LaserScan"): Role.SCAN,
+    ("json", "foxglove.PoseInFrame"): Role.ODOM,
+    ("json", "foxglove.FrameTransform"): Role.TF,
+    ("json", "geometry_msgs/Twist"): Role.CMD,
+    ("json", TWIST): Role.CMD,
+    ("json", TWIST_STAMPED): Role.CMD,
+    ("json", "lfdfuse.Twist"): Role.CMD,
+    ("json", "lfdfuse.TargetDetections"): Role.TARGETS,
+}
+
+
+@dataclass(frozen=True, eq=False)
+class LiveScan:
+    """A scan in its sensor frame ``frame`` (no return = ``inf``)."""
+
+    frame: str
+    record: ScanRecord
+
+
+@dataclass(frozen=True)
+class LiveOdom:
+    t_ns: int
+    x: float
+    y: float
+    theta: float
+    base_frame: str  # the odometry's child frame ('' when the message does not say)
+
+
+@dataclass(frozen=True)
+class Transform:
+    """``parent → child`` as a 4×4 homogeneous matrix (as nested tuples: frozen)."""
+
+    parent: str
+    child: str
+    matrix: tuple[tuple[float, ...], ...]
+
+
+@dataclass(frozen=True)
+class LiveTf:
+    transforms: tuple[Transform, ...]
+
+
+@dataclass(frozen=True)
+class LiveTwist:
+    v_mps: float
+    omega_rps: float
+
+
+@dataclass(frozen=True)
+class LiveTargets:
+    t_ns: int
+    detections: tuple[Detection, ...]
+
+
+Record = LiveScan | LiveOdom | LiveTf | LiveTwist | LiveTargets
+Decoder = Callable[[bytes], Record]
+
+
+def role_of(ch: ServerChannel) -> Role | None:
+    return KNOWN.get((ch.encoding, ch.schema_name))
+
+
+def _frame(name: str) -> str:
+    return name.lstrip("/")
+
+
+def matrix(tx: float, ty: float, tz: float, qx: float, qy: float, qz: float, qw: float) -> np.ndarray:
+    """A translation and a unit quaternion as a 4×4 homogeneous matrix."""
+    x, y, z, w = qx, qy, qz, qw
+    m = np.eye(4)
+    m[:3, :3] = [
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ]
+    m[:3, 3] = [tx, ty, tz]
+    return m
+
+
+def _frozen(m: np.ndarray) -> tuple[tuple[float, ...], ...]:
+    return tuple(tuple(float(v) for v in row) for row in m)
+
+
+def _stamp_ns(header: Any) -> int:
+    return int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
+
+
+# -- CDR (foxglove_bridge) ----------------------------------------------------------------------
+
+
+@lru_cache(maxsize=64)  # parsing a definition takes ~0.1 s; a reconnect advertises the same ones
+def typestore_for(schema_name: str, schema: str) -> Typestore:
+    """A type store holding ``schema_name`` from its ``ros2msg`` text (with its dependencies);
+    the standard ROS 2 (Humble) store when the server sent no text."""
+    if not schema.strip():
+        return get_typestore(Stores.ROS2_HUMBLE)
+    store = get_typestore(Stores.EMPTY)
+    try:
+        store.register(get_types_from_msg(schema, schema_name))
+    except Exception as exc:  # rosbags raises several types for a bad definition
+        raise DecodeError(f"cannot parse the ros2msg schema of {schema_name} ({exc})") from None
+    return store
+
+
+def _cdr(store: Typestore, name: str, read: Callable[[Any], Record]) -> Decoder:
+    def decode(data: bytes) -> Record:
+        try:
+            return read(store.deserialize_cdr(data, name))
+        except DecodeError:
+            raise
+        except Exception as exc:  # a truncated or foreign payload fails anywhere in the generated code
+            raise DecodeError(f"undecodable {name} ({exc.__class__.__name__})") from None
+
+    return decode
+
+
+def _cdr_scan(m: Any) -> LiveScan:
+    max_m = round(float(m.range_max), 6)  # float32 in the message: 5.6, not 5.5999999
+    ranges = no_return(np.asarray(m.ranges, dtype=np.float64), min_m=float(m.range_min), max_m=max_m)
+    rec = ScanRecord(_stamp_ns(m.header), float(m.angle_min), float(m.angle_increment), ranges, max_m)
+    return LiveScan(_frame(m.header.frame_id), rec)
+
+
+def _cdr_odom(m: Any) -> LiveOdom:
+    p = m.pose.pose
+    q = p.orientation
+    yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+    return LiveOdom(
+        _stamp_ns(m.header), float(p.position.x), float(p.position.y), yaw, _frame(m.child_frame_id)
+    )
+
+
+def _cdr_tf(m: Any) -> LiveTf:
+    out = []
+    for tr in m.transforms:
+        t, q = tr.transform.translation, tr.transform.rotation
+        mat = matrix(t.x, t.y, t.z, q.x, q.y, q.z, q.w)
+        out.append(Transform(_frame(tr.header.frame_id), _frame(tr.child_frame_id), _frozen(mat)))
+    return LiveTf(tuple(out))
+
+
+def _cdr_twist(m: Any) -> LiveTwist:
+    tw = getattr(m, "twist", m)  # TwistStamped or Twist
+    v, w = float(tw.linear.x), float(tw.angular.z)
+    if not (math.isfinite(v) and math.isfinite(w)):
+        raise DecodeError("a Twist that is not finite")
+    return LiveTwist(v, w)
+
+
+# -- JSON (lfdfuse's own server) ----------------------------------------------------------------
+
+
+def _json(name: str, read: Callable[[dict[str, Any]], Record]) -> Decoder:
+    def decode(data: bytes) -> Record:
+        try:
+            msg = orjson.loads(data)
+            return read(msg)
+        except DecodeError:
+            raise
+        except (orjson.JSONDecodeError, KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
+            raise DecodeError(f"undecodable {name} ({exc.__class__.__name__})") from None
+
+    return decode
+
+
+def _json_scan(m: dict[str, Any]) -> LiveScan:
+    s = decode_scan(m)
+    n = len(s.ranges_m)
+    if n == 0:
+        raise DecodeError("a scan without beams")
+    inc = (s.end_rad - s.start_rad) / (n - 1) if n > 1 else 0.0
+    ranges = no_return(np.asarray(s.ranges_m, dtype=np.float64), max_m=JSON_MAX_RANGE_M)
+    rec = ScanRecord(from_stamp(m["timestamp"]), s.start_rad, inc, ranges, JSON_MAX_RANGE_M)
+    return LiveScan(_frame(str(m.get("frame_id", ROBOT_FRAME))), rec)
+
+
+def _json_pose(m: dict[str, Any]) -> LiveOdom:
+    x, y, th = decode_pose(m)
+    return LiveOdom(from_stamp(m["timestamp"]), x, y, th, ROBOT_FRAME)
+
+
+def _json_tf(m: dict[str, Any]) -> LiveTf:
+    t, q = m["translation"], m["rotation"]
+    mat = matrix(t["x"], t["y"], t.get("z", 0.0), q["x"], q["y"], q["z"], q["w"])
+    yaw_of(q)  # validates the quaternion's fields
+    return LiveTf((Transform(_frame(m["parent_frame_id"]), _frame(m["child_frame_id"]), _frozen(mat)),))
+
+
+def _json_twist(data: bytes) -> Record:
+    try:
+        v, w = parse_twist(data)
+    except TwistError as exc:
+        raise DecodeError(f"undecodable Twist ({exc})") from None
+    return LiveTwist(v, w)
+
+
+def _json_targets(m: dict[str, Any]) -> LiveTargets:
+    return LiveTargets(from_stamp(m["timestamp"]), decode_detections(m))
+
+
+def decoder_for(ch: ServerChannel) -> Decoder:
+    """The decoder of an advertised channel whose :func:`role_of` is known."""
+    role = role_of(ch)
+    if role is None:
+        raise DecodeError(f"{ch.topic}: no decoder for {ch.encoding} {ch.schema_name}")
+    if ch.encoding == "cdr":
+        store = typestore_for(ch.schema_name, ch.schema)
+        cdr_reads: dict[Role, Callable[[Any], Record]] = {
+            Role.SCAN: _cdr_scan,
+            Role.ODOM: _cdr_odom,
+            Role.TF: _cdr_tf,
+            Role.CMD: _cdr_twist,
+        }
+        if role not in cdr_reads:
+            raise DecodeError(f"{ch.topic}: no decoder for {ch.encoding} {ch.schema_name}")
+        return _cdr(store, ch.schema_name, cdr_reads[role])
+    if role is Role.CMD:
+        return _json_twist
+    reads: dict[Role, Callable[[dict[str, Any]], Record]] = {
+        Role.SCAN: _json_scan,
+        Role.ODOM: _json_pose,
+        Role.TF: _json_tf,
+        Role.TARGETS: _json_targets,
+    }
+    return _json(ch.schema_name, reads[role])
+
+
+# -- the command we send ------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class TwistEncoder:
+    """The command we send in one encoding and type: its schema text and ``encode(v, ω, t_ns)``.
+
+    ``t_ns`` (the robot's clock) stamps a ``TwistStamped``; a plain ``Twist`` has no stamp.
+    """
+
+    encoding: str  # cdr | json
+    schema_name: str  # geometry_msgs/msg/Twist or geometry_msgs/msg/TwistStamped
+    schema: str
+    encode: Callable[[float, float, int], bytes]
+
+
+def twist_encoder(supported: tuple[str, ...], *, stamped: bool = False) -> TwistEncoder:
+    """CDR when the server takes it (a ROS 2 bridge), else JSON (lfdfuse's own server);
+    ``geometry_msgs/msg/TwistStamped`` when ``stamped`` (a robot whose command topic has that
+    type: ROS 2 Jazzy's Nav2 and TurtleBot 4), else ``geometry_msgs/msg/Twist``.
+
+    An empty list (an old server that does not say) means CDR: what foxglove_bridge takes.
+    """
+    name = TWIST_STAMPED if stamped else TWIST
+    if "cdr" in supported or not supported:
+        store = get_typestore(Stores.ROS2_HUMBLE)
+        text, _ = store.generate_msgdef(name)
+        T = store.types
+        twist, vec = T[TWIST], T["geometry_msgs/msg/Vector3"]
+
+        def cdr(v: float, w: float, t_ns: int) -> bytes:
+            msg = twist(vec(v, 0.0, 0.0), vec(0.0, 0.0, w))
+            if stamped:
+                t_ns = max(t_ns, 0)
+                stamp = T["builtin_interfaces/msg/Time"](t_ns // 1_000_000_000, t_ns % 1_000_000_000)
+                msg = T[TWIST_STAMPED](T["std_msgs/msg/Header"](stamp, ROBOT_FRAME), msg)
+            return bytes(store.serialize_cdr(msg, name))
+
+        return TwistEncoder("cdr", name, text, cdr)
+    if "json" in supported:
+
+        def js(v: float, w: float, t_ns: int) -> bytes:
+            zero = {"x": 0.0, "y": 0.0, "z": 0.0}
+            msg: dict[str, Any] = {"linear": {**zero, "x": v}, "angular": {**zero, "z": w}}
+            if stamped:
+                t_ns = max(t_ns, 0)
+                stamp = {"sec": t_ns // 1_000_000_000, "nanosec": t_ns % 1_000_000_000}
+                msg = {"header": {"stamp": stamp, "frame_id": ROBOT_FRAME}, "twist": msg}
+            return orjson.dumps(msg)
+
+        return TwistEncoder("json", name, "", js)
+    raise DecodeError(
+        f"the server takes neither CDR nor JSON from clients (it takes: {', '.join(supported)})"
+    )

@@ -1,0 +1,143 @@
+"""The live MCAP of ``drive -o live.mcap``: what was received, why the network turned, what was sent.
+
+Per fresh scan (the control tick): ``/scan`` (in the base frame, as ``import`` writes it),
+``/pose`` and ``/tf`` (the latest odometry, frame ``odom``), ``/targets`` when the robot has a
+camera, the ``/lfd/*`` channels of ``execute`` (written by its own
+:class:`~lfdfuse.execute.run.LfdRecorder`), ``/cmd_vel`` (the command sent; in ``--shadow``
+the robot's own) and ``/lfd/command`` (``lfdfuse.DriveCommand``: the network's command, sent
+or not, its latency and, in shadow, its heading error). Zero Twists of the watchdog and of the
+exit are on ``/cmd_vel`` and ``/lfd/command`` too. Log times are the robot's stamps, kept
+strictly increasing: a watchdog command between scans is placed by the wall time since the
+last scan.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+import orjson
+
+from lfdfuse.drive.core import DriveCore, Tick
+from lfdfuse.execute.run import LfdRecorder
+from lfdfuse.log import messages as msg
+from lfdfuse.log.stamps import stamp
+from lfdfuse.log.writer import LogWriter
+
+COMMAND_TOPIC = "/lfd/command"
+COMMAND_SCHEMA = "lfdfuse.DriveCommand"
+ODOM_FRAME = "odom"
+
+
+def drive_command(
+    t_ns: int,
+    command: tuple[float, float],
+    *,
+    source: str,
+    sent: bool,
+    latency_ms: float | None,
+    heading_error_deg: float | None,
+) -> bytes:
+    """An ``lfdfuse.DriveCommand`` (see ``schemas/lfdfuse.DriveCommand.json``)."""
+    return orjson.dumps(
+        {
+            "timestamp": stamp(t_ns),
+            "linear": {"x": round(command[0], 6)},
+            "angular": {"z": round(command[1], 6)},
+            "source": source,
+            "sent": sent,
+            "latency_ms": None if latency_ms is None else round(latency_ms, 4),
+            "heading_error_deg": None if heading_error_deg is None else round(heading_error_deg, 4),
+        }
+    )
+
+
+def decode_drive_command(m: dict[str, Any]) -> tuple[float, float, str, bool]:
+    """Inverse of :func:`drive_command`: ``(v, ω, source, sent)``."""
+    return float(m["linear"]["x"]), float(m["angular"]["z"]), str(m["source"]), bool(m["sent"])
+
+
+class LogClock:
+    """Strictly increasing log times from the robot's stamps and, between scans, the wall clock."""
+
+    def __init__(self) -> None:
+        self.last_ns = -1
+        self._scan: tuple[int, float] | None = None  # (stamp, wall s) of the last scan
+
+    def at_scan(self, stamp_ns: int, wall_s: float) -> int:
+        t = max(stamp_ns, self.last_ns + 1, 0)
+        self._scan = (t, wall_s)
+        self.last_ns = t
+        return t
+
+    def at_wall(self, wall_s: float) -> int:
+        base = self._scan
+        t = base[0] + round((wall_s - base[1]) * 1e9) if base is not None else 0
+        t = max(t, self.last_ns + 1, 0)
+        self.last_ns = t
+        return t
+
+
+class LiveRecorder:
+    """Writes a live run (see the module docstring) into an open :class:`LogWriter`."""
+
+    def __init__(self, log: LogWriter, core: DriveCore, *, shadow: bool) -> None:
+        self.log = log
+        self.core = core
+        self.shadow = shadow
+        self.clock = LogClock()
+        self._lfd: LfdRecorder | None = None
+        log.add_topic(COMMAND_TOPIC, COMMAND_SCHEMA)
+        self.ticks = 0
+
+    def tick(self, tick: Tick, *, wall_s: float, latency_ms: float | None) -> None:
+        core, log = self.core, self.log
+        assert core.frame is not None and core.driver is not None and core.mount is not None
+        t = self.clock.at_scan(tick.obs.t_ns, wall_s)
+        obs = tick.obs
+        scan = msg.laser_scan(t, obs.reading.ranges_m, core.frame.geometry)
+        mount = core.mount
+        scan["pose"] = {
+            "position": {"x": mount.x_m, "y": mount.y_m, "z": 0.0},
+            "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+        }
+        log.write("/scan", t, scan)
+        if core.odom is not None:
+            p = obs.pose
+            pose = msg.pose_in_frame(t, p.x, p.y, p.theta)
+            pose["frame_id"] = ODOM_FRAME
+            tf = msg.frame_transform(t, p.x, p.y, p.theta)
+            tf["parent_frame_id"] = ODOM_FRAME
+            log.write("/tf", t, tf)
+            log.write("/pose", t, pose)
+        if core.inputs.camera:
+            log.write("/targets", t, msg.target_detections(t, obs.reading.detections))
+        if self._lfd is None:
+            self._lfd = LfdRecorder(log, core.driver)
+        self._lfd.record(replace(obs, t_ns=t), tick.network)
+        held = tick.robot if self.shadow else tick.network
+        if held is not None:
+            log.write("/cmd_vel", t, msg.twist(t, held[0], held[1]))
+        log.write_raw(
+            COMMAND_TOPIC,
+            t,
+            drive_command(
+                t,
+                tick.network,
+                source="network",
+                sent=not self.shadow,
+                latency_ms=latency_ms,
+                heading_error_deg=tick.heading_error_deg,
+            ),
+        )
+        self.ticks += 1
+
+    def zero(self, *, wall_s: float, source: str) -> None:
+        """A zero Twist sent by the watchdog (``stale``) or on exit (``stop``)."""
+        t = self.clock.at_wall(wall_s)
+        self.log.write("/cmd_vel", t, msg.twist(t, 0.0, 0.0))
+        self.log.write_raw(
+            COMMAND_TOPIC,
+            t,
+            drive_command(t, (0.0, 0.0), source=source, sent=True, latency_ms=None, heading_error_deg=None),
+        )
