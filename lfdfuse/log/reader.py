@@ -19,7 +19,6 @@ from mcap.exceptions import McapError
 from mcap.reader import make_reader
 
 from lfdfuse.errors import LogError
-from lfdfuse.log import stamps
 from lfdfuse.log.messages import PROVENANCE, RawMessage, from_stamp
 from lfdfuse.log.sensing import (
     ScanMessage,
@@ -28,6 +27,9 @@ from lfdfuse.log.sensing import (
     decode_scan,
     decode_twist,
     scan_geometry,
+)
+from lfdfuse.log.stamps import (
+    MAX_T_NS,  # latest log time we read: int64 ns in our arrays (MCAP allows uint64)
 )
 from lfdfuse.sim.sensors import Detection, ScanGeometry
 
@@ -54,8 +56,6 @@ _READ_ERRORS = (
     zstandard.ZstdError,
 )
 _IMPORT_SUFFIXES = (".bag", ".db3", ".clf", ".log", ".gz", ".dat")
-#: latest log time we read: times are int64 nanoseconds in our arrays (MCAP allows uint64)
-MAX_T_NS = stamps.MAX_T_NS
 
 
 class _Bounded(io.BufferedReader):
