@@ -28,7 +28,7 @@ def test_systematic_is_exactly_unbiased_over_its_uniform(logw: np.ndarray) -> No
     np.testing.assert_allclose(mean, m * normalised(logw[None])[0], atol=2.0 / g + 1e-9)
 
 
-@settings(max_examples=15, deadline=None)
+@settings(max_examples=15, deadline=None, derandomize=True)
 @given(rows, st.integers(0, 2**32 - 1))
 def test_multinomial_and_the_default_are_unbiased_in_expectation(logw: np.ndarray, seed: int) -> None:
     m, chains = len(logw), 3000
@@ -36,6 +36,8 @@ def test_multinomial_and_the_default_are_unbiased_in_expectation(logw: np.ndarra
     tiled = np.tile(logw, (chains, 1))
     for draw in (multinomial, resample):
         mean = _counts(draw(tiled, np.random.default_rng(seed)), m).mean(axis=0)
-        # a copy count has variance at most M w (1 − w): six standard errors of the mean
+        # a copy count has variance at most M w (1 − w): six standard errors of the mean; for a
+        # particle of tiny weight the normal bound fails (a single copy among the chains is then a
+        # rare but fair event), so a few copies' worth (3 / chains) is allowed beside it
         sd = np.sqrt(m * w * (1 - w) / chains)
-        assert (np.abs(mean - m * w) <= 6 * sd + 1e-9).all()
+        assert (np.abs(mean - m * w) <= 6 * sd + 3.0 / chains).all()
