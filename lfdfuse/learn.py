@@ -2,7 +2,8 @@
 
 :func:`learn` is the one path from segmented demonstrations to a :class:`FusionTable` that
 ``lfdfuse estimate``, the paper's experiments, the benches, the round trips and the tests call:
-each demo is read once (its ``/lfd/*`` channels, and with sub-goals its ``/scan`` and ``/pose``),
+several demos are pooled into one table (:func:`lfdfuse.estimate.pipeline.estimate_runs`); each
+demo is read once (its ``/lfd/*`` channels, and with sub-goals its ``/scan`` and ``/pose``),
 estimated once (:func:`lfdfuse.estimate.pipeline.estimate_run`), and with ``subgoals`` the table
 is refined at the demo's decision points (:func:`lfdfuse.estimate.subgoals.refine`), which
 estimates only the new sub-segment rows. :func:`learn_run` is the same on a run in memory.
@@ -19,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
+from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run, estimate_runs
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.log.reader import read_run
@@ -78,14 +79,31 @@ def learn(
     options: LearnOptions = LearnOptions(),
     progress: Callable[[float, float], None] | None = None,
 ) -> LearnResult:
-    """The fusion table of segmented demo logs (today exactly one: pooling demos is to come)."""
-    if len(demos) != 1:
-        raise ConfigError(f"learning takes one demonstration for now (got {len(demos)})")
-    src = demos[0]
-    run = read_segmented(src)
-    name = Path(src).name
-    track = track_of(read_run(src), run, source=str(src)) if options.subgoals else None
-    return learn_run(run, options=options, track=track, name=name, progress=progress)
+    """The fusion table of segmented demo logs, pooled (:mod:`lfdfuse.estimate.pool`): a row's
+    likelihood is the product over the demos that met its (step, BAC); each demo keeps its own
+    lag (its segmentation's). A correction log (``teleop --table``, segmented) is one more demo
+    whose network-driven ticks are non-informative, so only the person's ticks change rows."""
+    if not demos:
+        raise ConfigError("learning needs at least one demonstration")
+    if len(demos) == 1:
+        src = demos[0]
+        run = read_segmented(src)
+        name = Path(src).name
+        track = track_of(read_run(src), run, source=str(src)) if options.subgoals else None
+        return learn_run(run, options=options, track=track, name=name, progress=progress)
+    if options.subgoals:
+        raise ConfigError(
+            "sub-goals are learned from one demonstration for now: drop --subgoals to pool demos"
+        )
+    where = [Path(d).resolve() for d in demos]
+    if len(set(where)) != len(where):
+        raise ConfigError("the same demonstration is given twice: its evidence would count double")
+    names = [Path(d).name for d in demos]
+    if len(set(names)) != len(names):
+        names = [str(d) for d in demos]
+    runs = [read_segmented(d) for d in demos]
+    table, groups, skipped = estimate_runs(runs, opts=options.estimate, names=names, progress=progress)
+    return LearnResult(table, groups, skipped, (), tuple(names))
 
 
 # ------------------------------------------------------------------------------ demonstrate

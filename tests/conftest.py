@@ -3,7 +3,9 @@ from __future__ import annotations
 import os
 import shutil
 import subprocess
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -20,6 +22,16 @@ def mcap_check(path: Path) -> str:
     res = subprocess.run(["bash", str(MCAP_CHECK), str(path)], capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stdout + res.stderr
     return res.stdout
+
+
+@pytest.fixture(scope="session")
+def dask_cluster() -> Iterator[Any]:
+    """One 2-worker Dask LocalCluster (processes, one thread each) for every test that needs one."""
+    pytest.importorskip("distributed")
+    from lfdfuse.parallel import open_executor
+
+    with open_executor(workers=2) as ex:
+        yield ex
 
 
 @pytest.fixture(scope="session")

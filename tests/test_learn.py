@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from lfdfuse.errors import ConfigError
@@ -36,11 +37,36 @@ def test_demonstrate_is_seeded_and_learn_reads_what_it_wrote(teacher: str, tmp_p
     assert got.groups >= got.skipped >= 0
 
 
-def test_learn_takes_one_demo_for_now(tmp_path: Path) -> None:
-    with pytest.raises(ConfigError, match="one demonstration"):
+def test_learn_needs_a_demo_and_pools_without_subgoals(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="at least one demonstration"):
         learn([])
-    with pytest.raises(ConfigError, match="got 2"):
-        learn([tmp_path / "a.seg.mcap", tmp_path / "b.seg.mcap"])
+    with pytest.raises(ConfigError, match="sub-goals"):
+        learn([tmp_path / "a.seg.mcap", tmp_path / "b.seg.mcap"], options=LearnOptions(subgoals=True))
+    with pytest.raises(ConfigError, match="twice"):
+        learn([tmp_path / "a.seg.mcap", tmp_path / "." / "a.seg.mcap"])
+
+
+def test_a_demo_pooled_with_itself_keeps_its_weights_and_narrows(tmp_path: Path) -> None:
+    """The same steps twice: the likelihood squared, so the rows' posteriors narrow (none widens)
+    and their samples double; the first demo's weights are the rows' ``weights_before``."""
+    d = demonstrate(
+        (Leg(None, "keep-left"),), world=load_world("tee"), folder=tmp_path, name="d", duration_s=30.0, seed=1
+    )
+    twin = tmp_path / "twin.seg.mcap"
+    twin.write_bytes(d.segmented.read_bytes())
+    one, two = learn([d.segmented]).table, learn([d.segmented, twin]).table
+    assert two.estimated_by["sources"] == ["d.seg.mcap", "twin.seg.mcap"]
+    rows = {(s.name, r.bac): r for s in one.network.steps for r in s.fusion}
+    ratios = []
+    for s in two.network.steps:
+        for r in s.fusion:
+            alone = rows[(s.name, r.bac)]
+            assert r.samples == 2 * (alone.samples or 0) and r.samples_added == alone.samples
+            assert r.weights_before == alone.weights
+            if r.std and alone.std:
+                ratios += [r.std[b] / alone.std[b] for b in r.std if alone.std[b] > 1e-3]
+    # rows the data limits narrow; a sloppy direction the likelihood leaves flat stays as wide
+    assert ratios and float(np.median(ratios)) < 0.85 and max(ratios) < 1.15
 
 
 def test_subgoals_without_a_track_is_a_config_error(tmp_path: Path) -> None:

@@ -6,6 +6,7 @@ import functools
 import math
 import os
 import signal
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -18,8 +19,16 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
 from lfdfuse.errors import ConfigError, LfdError
 
-console = Console(highlight=False)
-err_console = Console(stderr=True, highlight=False)
+
+class _Console(Console):
+    """rich's console, but a closed pipe is left to :func:`user_errors` (rich exits 1 on it)."""
+
+    def on_broken_pipe(self) -> None:
+        raise BrokenPipeError
+
+
+console = _Console(highlight=False)
+err_console = _Console(stderr=True, highlight=False)
 # piped output keeps its long lines whole (a file or a grep has no 80-column screen to fit)
 console.soft_wrap = not console.is_terminal
 
@@ -33,7 +42,13 @@ def user_errors(fn: F) -> F:
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         try:
             with _terminate_as_exception():
-                return fn(*args, **kwargs)
+                result = fn(*args, **kwargs)
+                sys.stdout.flush()  # a closed pipe shows here, not at exit after click's handler
+                return result
+        except BrokenPipeError:
+            # `lfdfuse … | head`: the reader has what it wanted; the rest goes nowhere, success
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            raise typer.Exit(0) from None
         except LfdError as exc:
             err_console.print(f"error: {exc}", markup=False, soft_wrap=True)
             raise typer.Exit(1) from None

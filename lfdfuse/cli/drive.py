@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from lfdfuse.cli.app import app
-from lfdfuse.cli.common import check_outputs, console, duration_option, err_console, user_errors
+from lfdfuse.cli.common import check_outputs, console, err_console, user_errors
 from lfdfuse.drive.session import DriveOptions, DriveSummary, drive
 from lfdfuse.network.table import load_table
 
@@ -46,8 +46,12 @@ def drive_cmd(
         max=20.0,
         help="Clamp the turn rate to this (rad/s); default: the table's robot.",
     ),
-    duration: float | None = duration_option(
-        None, "--duration", help="Stop after this many seconds (default: until Ctrl-C or SIGTERM)."
+    duration: float | None = typer.Option(
+        None,
+        "--duration",
+        min=0.1,
+        max=86_400.0,
+        help="Stop after this many seconds (default: until Ctrl-C or SIGTERM).",
     ),
     out: Path | None = typer.Option(
         None, "--out", "-o", help="Record the live run (MCAP): sensors received, /lfd/*, commands sent."
@@ -62,8 +66,8 @@ def drive_cmd(
 
     Examples:
       lfdfuse drive fusion.yaml --connect ws://robot:8765 --shadow -o shadow.mcap
-      lfdfuse drive fusion.yaml --connect ws://robot:8765 --max-speed 0.2 -o live.mcap
-      lfdfuse drive fusion.yaml --connect ws://127.0.0.1:8765 --odom /pose --duration 60
+      lfdfuse drive t.yaml --connect ws://robot:8765 --max-speed 0.2 -o live.mcap
+      lfdfuse drive t.yaml --connect ws://localhost:8765 --duration 60
     """
     check_outputs([out], [table])
     tab = load_table(table)

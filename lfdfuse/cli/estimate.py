@@ -9,18 +9,24 @@ import typer
 
 from lfdfuse.cli.app import app
 from lfdfuse.cli.common import check_outputs, console, progress_bar, seed_option, user_errors
-from lfdfuse.cli.render import print_table
+from lfdfuse.cli.render import print_changes, print_table
 from lfdfuse.estimate.methods import EstimateOptions, Likelihood, Method
 from lfdfuse.estimate.paper import PFParams
 from lfdfuse.estimate.smc import SMCParams
 from lfdfuse.learn import LearnOptions, learn
 from lfdfuse.network.table import write_table
+from lfdfuse.segment.commands import CommandChoice
 
 
 @app.command("estimate")
 @user_errors
 def estimate_cmd(
-    src: Path = typer.Argument(..., help="A segmented log (from `lfdfuse segment`)."),
+    srcs: list[Path] = typer.Argument(
+        ...,
+        help="Segmented logs (from `lfdfuse segment`): one demo, or several pooled into one table "
+        "(goal steps matched by goal; a correction log from `teleop --table` adds its person's ticks).",
+        metavar="DEMO...",
+    ),
     method: Method = typer.Option(
         Method.PF,
         "--method",
@@ -55,6 +61,12 @@ def estimate_cmd(
         "--subgoals",
         help="Turn-offs the teacher took into an opening (a spur, a room) become landmark sub-goal steps.",
     ),
+    commands: CommandChoice = typer.Option(
+        CommandChoice.AUTO,
+        "--commands",
+        help="Command model: continuous (on the drive mapping), discrete (a few keys, one observation per "
+        "decision) or auto (what segment found in the log).",
+    ),
     out: Path = typer.Option(Path("fusion.yaml"), "--out", "-o", help="Output fusion table (YAML)."),
 ) -> None:
     """Estimate fusion weights per goal segment and BAC, and write the behaviour network.
@@ -65,15 +77,19 @@ def estimate_cmd(
       lfdfuse estimate demo.seg.mcap
       lfdfuse estimate demo.seg.mcap --trials 30 -o fusion.yaml
       lfdfuse estimate demo.seg.mcap --method nnls -o nnls.yaml
+      lfdfuse estimate a.seg.mcap b.seg.mcap c.seg.mcap -o pooled.yaml
+      lfdfuse estimate demo.seg.mcap correction.seg.mcap -o corrected.yaml
     """
-    check_outputs([out], [src])
+    check_outputs([out], list(srcs))
     pf = replace(PFParams(), particles=particles, likelihood=likelihood.literal)
     smc = replace(SMCParams(), particles=particles)
-    opts = EstimateOptions(method=method, trials=trials, seed=seed, pf=pf, smc=smc)
+    opts = EstimateOptions(method=method, trials=trials, seed=seed, pf=pf, smc=smc, commands=commands.mode)
     with progress_bar("estimate") as update:
-        res = learn([src], options=LearnOptions(estimate=opts, subgoals=subgoals), progress=update)
+        res = learn(srcs, options=LearnOptions(estimate=opts, subgoals=subgoals), progress=update)
     write_table(res.table, out)
+    what = str(srcs[0]) if len(srcs) == 1 else f"{len(srcs)} demos"
     console.print(
-        f"[bold]estimate[/bold] {src} → {out}  ({method}, {trials} trial{'s' if trials > 1 else ''}, {res.groups} groups)"
+        f"[bold]estimate[/bold] {what} → {out}  ({method}, {trials} trial{'s' if trials > 1 else ''}, {res.groups} groups)"
     )
     print_table(res.table)
+    print_changes(res.table)

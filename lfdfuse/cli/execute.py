@@ -16,9 +16,12 @@ from lfdfuse.cli.common import (
     sensor_noise_option,
     user_errors,
 )
+from lfdfuse.cli.execute_starts import execute_starts, starts_of
+from lfdfuse.cli.parallel import one_executor, scheduler_option, workers_option
 from lfdfuse.cli.render import print_report
 from lfdfuse.execute.report import write_report
 from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.execute.starts import StartsOptions
 from lfdfuse.network.table import load_table
 from lfdfuse.sim.robot import Pose
 from lfdfuse.world.model import DEFAULT_WORLD, load_world
@@ -44,6 +47,14 @@ def execute_cmd(
         Path("run.mcap"), "--out", "-o", help="Run log (MCAP) with the /lfd/* channels and an overlay."
     ),
     report: Path | None = typer.Option(None, "--report", help="Write the JSON report here."),
+    starts: str | None = typer.Option(
+        None,
+        "--starts",
+        help="N: run from N starts perturbed ±0.5 m, ±20° around --start (seeded), or a YAML file listing"
+        " poses (X,Y,THETA each); prints completed/N with a 95 % interval (no run logs are kept).",
+    ),
+    workers: int | None = workers_option(),
+    scheduler: str | None = scheduler_option(),
 ) -> None:
     """Let a learned behaviour network drive the robot, log the run and report how it went.
 
@@ -52,8 +63,26 @@ def execute_cmd(
     Examples:
       lfdfuse execute fusion.yaml --world building -o run.mcap --report run.json
       lfdfuse execute fusion.yaml --world tee --start 1,9,0 --max-time 120
+      lfdfuse execute task.yaml --starts 10 --workers 2 --report rate.json
     """
     check_outputs([out, report], [table, existing(world)])
+    if starts is not None:
+        one_executor(workers, scheduler)
+        pose0 = Pose.parse(start) if start is not None else None
+        many = StartsOptions(
+            table=table,
+            world=world,
+            starts=starts_of(starts),
+            base=pose0,
+            max_time_s=max_time,
+            seed=seed,
+            sensor_noise_m=noise,
+            stop_on_collision=stop_on_collision,
+        )
+        execute_starts(many, workers=workers, scheduler=scheduler, report=report)
+        return
+    if workers is not None or scheduler is not None:
+        raise typer.BadParameter("--workers and --scheduler run many starts: give --starts too")
     w = load_world(world)
     tab = load_table(table)
     pose = Pose.parse(start) if start is not None else None

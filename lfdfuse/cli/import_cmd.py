@@ -107,10 +107,10 @@ def import_cmd(
     --cmd-from odom) gets commands derived from successive poses.
 
     Examples:
-      lfdfuse import ../shared/realdata/ros2/macfirst_floor_take_2.mcap -o turtlebot.mcap
+      lfdfuse import turtlebot-bag.mcap -o turtlebot.mcap
       lfdfuse import neato.bag --teacher human -o neato.mcap
       lfdfuse import intel-corrected.log.gz -o intel.mcap
-      lfdfuse import run.bag --scan /base_scan --cmd-from odom --goals goals.yaml -o demo.mcap
+      lfdfuse import run.bag --scan /base_scan --cmd-from odom --goals goals.yaml
     """
     opts = ImportOptions(
         fmt=None if fmt is None else fmt.value,

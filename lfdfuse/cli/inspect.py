@@ -9,7 +9,7 @@ from rich.table import Table
 
 from lfdfuse.cli.app import app
 from lfdfuse.cli.common import console, user_errors
-from lfdfuse.cli.render import print_segments, print_subgoals, print_table
+from lfdfuse.cli.render import print_changes, print_provenance, print_segments, print_subgoals, print_table
 from lfdfuse.errors import ConfigError
 from lfdfuse.files import YamlKind, kind_of, read_yaml
 from lfdfuse.log.messages import PROVENANCE
@@ -66,6 +66,9 @@ def inspect(
     if "/lfd/segment" in info.channels and "/lfd/behaviors" in info.channels:
         seg = read_segmented(file)
         console.print(f"  segmented with: {', '.join(seg.names)}")
+        net = seg.metadata.get("segment_network_ticks")
+        if net is not None:  # a correction log: only the person's ticks teach
+            console.print(f"  correction log: {net} tick(s) the network drove are not informative")
         print_segments(segmentation_of(seg), seg.names, step_s_of(seg.t_ns))
 
 
@@ -81,7 +84,9 @@ def _inspect_yaml(file: Path) -> None:
     if kind is YamlKind.TABLE:
         table = parse_table(data)
         console.print(f"[bold]{file}[/bold]  fusion table, {len(table.behaviors)} behaviours")
+        print_provenance(table)
         print_table(table)
+        print_changes(table)  # pooled demos: the rows the later ones changed, before → after
         if any(s.network is not None for s in table.network.steps):
             print_subgoals(table)  # sub-goals at decision points, in words (issue 15)
     elif kind is YamlKind.TASK:

@@ -17,7 +17,9 @@ from lfdfuse.cli import (
     teleop,  # noqa: F401
     worlds,  # noqa: F401
 )
-from lfdfuse.cli.app import app
+from lfdfuse.cli.app import app, finish
+
+finish(app)  # every command's help from its docstring, readable at any width
 
 __all__ = ["app", "main"]
 

@@ -7,8 +7,9 @@ from typing import Any
 from rich.table import Table
 
 from lfdfuse.cli.common import console
-from lfdfuse.execute.report import verdict
-from lfdfuse.network.table import FusionTable, Network
+from lfdfuse.estimate.methods import EstimateOptions
+from lfdfuse.execute.report import help_line, verdict
+from lfdfuse.network.table import FusionRow, FusionTable, Network
 from lfdfuse.segment.goals import Segmentation, bac_summary
 from lfdfuse.sim.loop import RunSummary
 
@@ -63,12 +64,45 @@ def bac_names(bac: int, names: tuple[str, ...] | list[str]) -> str:
     return "+".join(on) or "none"
 
 
+#: methods that fit one point: no posterior, so no std without a bootstrap (--trials K)
+_POINT_FITS = ("nnls", "arbitration")
+
+
+def print_provenance(table: FusionTable) -> None:
+    """Which method made a table, from what, with which settings (its ``estimated_by``)."""
+    by = dict(table.estimated_by)
+    if not by:
+        console.print("  made by: not recorded (a hand-written table?)")
+        return
+    head = [str(by.pop(k)) for k in ("method",) if k in by]
+    trials = by.pop("trials", None)
+    if trials is not None:
+        head.append(f"{trials} trial{'s' if int(trials) != 1 else ''}")
+    if "seed" in by:
+        head.append(f"seed {by.pop('seed')}")
+    source = by.pop("source", None)
+    rest = ", ".join(f"{k} {v}" for k, v in by.items())
+    console.print(
+        f"  made by: {', '.join(head)}"
+        + (f", from {source}" if source else "")
+        + (f" ({rest})" if rest else "")
+    )
+
+
 def print_table(table: FusionTable) -> None:
     """Weights (± std), samples and fit error per step and BAC, in percent to fit a terminal."""
     legend = ", ".join(f"{_abbrev(b)}={b}" for b in table.behaviors)
+    by = table.estimated_by
+    # a least-squares fit has no uncertainty: its std is 0 by construction unless bootstrapped
+    show_std = not (by.get("method") in _POINT_FITS and int(by.get("trials", 1)) == 1)
+    spread = (
+        "weights ± std in % of the row"
+        if show_std
+        else f"weights in % of the row ({by.get('method')} has no uncertainty: --trials K bootstraps one)"
+    )
     console.print(
         "BAC = the set of applicable behaviours (bit i = the i-th below; a blank weight: not applicable); "
-        "weights and std in % of the row; n = samples (* = too few to trust); fit° = mean heading error;"
+        f"{spread}; n = samples (* = too few to trust); fit° = mean heading error;"
         f" BAC? = not identifiable (the prior decides)\n{legend}"
     )
 
@@ -91,7 +125,7 @@ def print_table(table: FusionTable) -> None:
                 cells = []
                 for b in table.behaviors:
                     if b in row.weights:
-                        sd = (row.std or {}).get(b)
+                        sd = (row.std or {}).get(b) if show_std else None
                         cells.append(
                             f"{100 * row.weights[b]:.0f}" + (f"±{100 * sd:.0f}" if sd is not None else "")
                         )
@@ -106,6 +140,61 @@ def print_table(table: FusionTable) -> None:
                 console.print("    (no informative steps: default weights)")
 
     walk(table.network, 0)
+    few = [r for r in _rows(table.network) if r.low_samples]
+    if few:
+        least = min(r.samples or 0 for r in few)
+        console.print(
+            f"[bold]{len(few)} of {len(_rows(table.network))} row(s) learned from too few samples[/bold] (n*,"
+            f" fewer than {EstimateOptions().min_samples}; the least {least}): their weights say little"
+            " more than the prior; demonstrate those situations longer"
+        )
+
+
+def _rows(net: Network) -> list[FusionRow]:
+    """Every fusion row of a network, nested steps included."""
+    out: list[FusionRow] = []
+    for step in net.steps:
+        out += _rows(step.network) if step.network is not None else list(step.fusion)
+    return out
+
+
+def changed_rows(table: FusionTable) -> list[tuple[str, FusionRow]]:
+    """The rows pooled demos changed (``samples_added``), with their step's name, in table order."""
+    out: list[tuple[str, FusionRow]] = []
+
+    def walk(net: Network) -> None:
+        for step in net.steps:
+            if step.network is not None:
+                walk(step.network)
+            out.extend((step.name, r) for r in step.fusion if r.samples_added)
+
+    walk(table.network)
+    return out
+
+
+def print_changes(table: FusionTable) -> None:
+    """Per row the later demos changed: the samples they added and the weights before → after."""
+    sources = table.estimated_by.get("sources")
+    rows = changed_rows(table)
+    if not isinstance(sources, list) or len(sources) < 2:
+        return
+    console.print(
+        f"pooled {len(sources)} demos ({', '.join(str(s) for s in sources)}): {len(rows)} row(s) changed "
+        f"by the demos after {sources[0]}; every other row is {sources[0]}'s alone"
+    )
+    for name, r in rows:
+        before = r.weights_before or {}
+        moves = ", ".join(
+            f"{_abbrev(b)} {100 * before[b]:.0f}→{100 * w:.0f}"
+            if b in before
+            else f"{_abbrev(b)} {100 * w:.0f}"
+            for b, w in r.weights.items()
+        )
+        what = "new row" if r.weights_before is None else "weights %"
+        console.print(
+            f"  {name} BAC {r.bac} ({bac_names(r.bac, table.behaviors)}): +{r.samples_added} samples "
+            f"({r.samples} in all), {what}: {moves}"
+        )
 
 
 def print_subgoals(table: FusionTable) -> None:
@@ -148,4 +237,7 @@ def print_report(rep: dict[str, Any], *, out: str) -> None:
     console.print(
         f"  overall: left {rep['left_range_mean_m']:.2f} m, right {rep['right_range_mean_m']:.2f} m; default weights on {100 * rep['unseen_bac_fraction']:.1f}% of ticks"
     )
+    asked = help_line(rep)
+    if asked is not None:
+        console.print(f"  {asked}", markup=False)
     console.print(f"  [bold]verdict[/bold]: {verdict(rep)}")

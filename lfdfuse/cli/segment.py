@@ -10,6 +10,8 @@ from lfdfuse.behaviors.primitives import DEFAULT_PRESET, PRESETS
 from lfdfuse.cli.app import app, default_out
 from lfdfuse.cli.common import check_outputs, console, progress_bar, user_errors
 from lfdfuse.cli.render import print_segments
+from lfdfuse.errors import ConfigError
+from lfdfuse.segment.commands import CommandChoice
 from lfdfuse.segment.pipeline import segment_file
 
 
@@ -23,8 +25,15 @@ def segment_cmd(
         "-b",
         help=f"A preset ({', '.join(PRESETS)}) or a comma list of behaviour names.",
     ),
-    lag: float = typer.Option(
-        0.0, "--lag", help="Pair each scan with the command issued this many seconds later (reaction lag)."
+    lag: str = typer.Option(
+        "auto",
+        "--lag",
+        help="Pair each scan with the command issued this many seconds later (reaction lag); auto: the best-explaining lag.",
+    ),
+    commands: CommandChoice = typer.Option(
+        CommandChoice.AUTO,
+        "--commands",
+        help="How the teacher commands: continuous (on the drive mapping), discrete (a few keys, held), or auto (from the log).",
     ),
     out: Path | None = typer.Option(
         None, "--out", "-o", help="Output MCAP (default: IN with .seg before .mcap)."
@@ -39,11 +48,13 @@ def segment_cmd(
       lfdfuse segment demo.mcap --behaviors full -o demo.full.seg.mcap
       lfdfuse segment demo.mcap --behaviors avoid,attract,wander_left,wander_right
       lfdfuse segment demo.mcap --lag 0.3
+      lfdfuse segment keyboard.mcap --commands discrete
     """
+    lag_s = parse_lag(lag)
     target = out or default_out(src, ".seg")
     check_outputs([target], [src])
     with progress_bar("segment"):
-        res = segment_file(src, out=target, behaviors=behaviors, lag_s=lag)
+        res = segment_file(src, out=target, behaviors=behaviors, lag_s=lag_s, commands=commands.mode)
     console.print(f"[bold]segment[/bold] {src} → {res.out}")
     console.print(f"  behaviours: {', '.join(res.names)}")
     still = int((~res.informative).sum())
@@ -58,3 +69,13 @@ def segment_cmd(
             f"(per-BAC least-squares heading error {best.heading_error_deg:.1f}°{now})"
         )
     print_segments(res.segmentation, res.names, res.step_s)
+
+
+def parse_lag(text: str) -> float | None:
+    """``--lag``: ``auto`` (None) or seconds."""
+    if text.strip().lower() == "auto":
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        raise ConfigError(f"--lag must be a number of seconds or auto, got {text[:40]!r}") from None

@@ -20,6 +20,7 @@ from lfdfuse.cli.common import (
     user_errors,
 )
 from lfdfuse.cli.render import print_run
+from lfdfuse.errors import ConfigError
 from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.network.table import parse_table
 from lfdfuse.sim.robot import Pose
@@ -53,6 +54,14 @@ def simulate_cmd(
         callback=finite,
         help="Teacher heading noise std in degrees (default 5; correlated for style teachers).",
     ),
+    keys: float | None = typer.Option(
+        None,
+        "--keys",
+        min=0.1,
+        max=60.0,
+        callback=finite,
+        help="The teacher as a person at a keyboard: the nearest teleop key every KEYS seconds (jittered), held.",
+    ),
     out: Path = typer.Option(Path("demo.mcap"), "--out", "-o", help="Output MCAP file."),
 ) -> None:
     """Drive a scripted teacher in a world and record the demonstration as MCAP.
@@ -64,7 +73,8 @@ def simulate_cmd(
     Examples:
       lfdfuse simulate --world corridor --teacher keep-right -o right.mcap
       lfdfuse simulate --world building --teacher task.yaml --seed 3 -o task.mcap
-      lfdfuse simulate --world building --teacher fusion.yaml --heading-noise 5 -o truth.mcap
+      lfdfuse simulate --teacher fusion.yaml --heading-noise 5 -o truth.mcap
+      lfdfuse simulate --teacher task.yaml --keys 0.5 -o keys.mcap
     """
     check_outputs([out], [existing(world), existing(teacher)])
     w = load_world(world)
@@ -74,6 +84,8 @@ def simulate_cmd(
     if heading_noise is not None:
         tp = replace(tp, heading_noise_rad=math.radians(heading_noise))
     if isinstance(spec, NetworkTeacher):
+        if keys is not None:
+            raise ConfigError("--keys needs a style or task teacher, not a fusion table")
         eopts = ExecuteOptions(
             world=w,
             table=parse_table(spec.data),
@@ -97,7 +109,11 @@ def simulate_cmd(
         start=pose,
         sensor_noise_m=noise,
         teacher=tp,
+        keys_period_s=keys,
     )
     with progress_bar("simulate") as update:
         summary = simulate(opts, out=out, progress=update)
-    print_run(summary, title=f"simulate {w.name} / {spec.name}")
+    print_run(
+        summary,
+        title=f"simulate {w.name} / {spec.name}" + ("" if keys is None else f" at a keyboard ({keys:g} s)"),
+    )

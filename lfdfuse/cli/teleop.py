@@ -27,15 +27,28 @@ from rich.panel import Panel
 from rich.text import Text
 
 from lfdfuse.cli.app import WORLD_HELP, app
-from lfdfuse.cli.common import console, duration_option, finite, seed_option, user_errors
-from lfdfuse.cli.render import print_run
+from lfdfuse.cli.common import (
+    check_outputs,
+    console,
+    duration_option,
+    existing,
+    finite,
+    seed_option,
+    user_errors,
+)
+from lfdfuse.cli.render import print_report, print_run
 from lfdfuse.errors import ConfigError
+from lfdfuse.execute.correct import correct, correction_driver
+from lfdfuse.execute.report import write_report
+from lfdfuse.network.driver import NetworkDriver
+from lfdfuse.network.table import load_table
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sim.sensors import ScanGeometry
 from lfdfuse.sources.teleop.inputs import Input
 from lfdfuse.sources.teleop.keys import HELP, KeyDecoder
 from lfdfuse.sources.teleop.script import ScriptInput, load_script
 from lfdfuse.sources.teleop.session import (
+    HANDBACK_KEY,
     SimClock,
     TeleopOptions,
     TeleopSession,
@@ -59,6 +72,8 @@ class InputKind(StrEnum):
 
 
 LAYOUT = "foxglove/teleop-layout.json"
+#: a correction run without --duration ends when execute's would (its --max-time default)
+TABLE_DURATION_S = 300.0
 
 
 @app.command("teleop")
@@ -95,6 +110,19 @@ def teleop_cmd(
         None, "--start", help="Start pose X,Y,THETA (m, m, rad); default: the world's."
     ),
     out: Path = typer.Option(Path("demo.mcap"), "--out", "-o", help="Output MCAP file."),
+    table: Path | None = typer.Option(
+        None,
+        "--table",
+        help="A fusion table that drives until you take over (any key or client Twist); h gives control back.",
+    ),
+    handback: float | None = duration_option(
+        None,
+        "--handback",
+        help="With --table: give control back to the network after this many seconds without input.",
+    ),
+    report: Path | None = typer.Option(
+        None, "--report", help="With --table: write execute's JSON report of the network's task here."
+    ),
 ) -> None:
     """Drive the simulated robot yourself and record the run as a demonstration.
 
@@ -109,14 +137,29 @@ def teleop_cmd(
     `segment`, `estimate` and `execute` take it unchanged. It is written when the run ends
     (key, --duration, SIGINT, SIGTERM), atomically; ending a run is not an error (exit 0).
 
+    Corrections (--table): the learned network drives; any key or client Twist takes over at
+    once, h (a script's {t: …, handback: true}, or --handback SECONDS without input) gives
+    control back. The log adds who drove each tick (/lfd/authority) and the network's proposal
+    (/lfd/step, /lfd/fused, help requests on /lfd/network). The run ends when the task is
+    complete, or after --duration (default 300 s, as execute's --max-time). With --input script
+    it is tick for tick the `execute` run of the same table, --seed and --start until the
+    first input.
+
     Examples:
       lfdfuse teleop --world building -o mine.mcap
       lfdfuse teleop --input foxglove --port 8765 --duration 600 -o mine.mcap
       lfdfuse teleop --input script --script drive.yaml -o scripted.mcap
+      lfdfuse teleop --table t.yaml --input script --script fix.yaml -o fix.mcap
     """
     if (input_ is InputKind.SCRIPT) != (script is not None):
         raise ConfigError("--script FILE goes with --input script (and only with it)")
+    if table is None and (handback is not None or report is not None):
+        raise ConfigError("--handback and --report go with --table (a network to correct)")
+    check_outputs([out, report], [table, script, existing(world)])
     w = load_world(world)
+    tab = load_table(table) if table is not None else None
+    if tab is not None and duration is None:
+        duration = TABLE_DURATION_S
     pose = Pose.parse(start) if start else None
     opts = TeleopOptions(
         world=w,
@@ -125,13 +168,35 @@ def teleop_cmd(
         start=pose,
         duration_s=duration,
         twist_timeout_s=timeout if input_ is InputKind.FOXGLOVE else None,
+        handback_s=handback,
     )
     laser = opts.sensors.laser.geometry
+    driver = correction_driver(opts, tab) if tab is not None else None
+    result: Any = None
+
+    def drive(session: TeleopSession, sinks: tuple[Any, ...] = ()) -> Any:
+        nonlocal result
+        if driver is None:
+            return teleop(opts, session=session, out=out, sinks=sinks)
+        assert table is not None
+        result = correct(opts, session=session, driver=driver, table_name=table.name, out=out, sinks=sinks)
+        return result.teleop
+
+    def status(session: TeleopSession, extra: Any = None) -> Any:
+        """The live view's status line: the clients, and with a table who drives and help."""
+        if driver is None:
+            return extra
+        return lambda: "  ".join(p for p in (_network_status(session, driver), extra() if extra else "") if p)
+
+    help_text = HELP + (
+        f"\n{HANDBACK_KEY}      hand control back to the network" if driver is not None else ""
+    )
     if input_ is InputKind.SCRIPT:
         assert script is not None
-        session = make_session(opts, inputs=[ScriptInput(load_script(script))], clock=SimClock())
+        feed = ScriptInput(load_script(script), end_with_last=driver is None)
+        session = make_session(opts, inputs=[feed], clock=SimClock(), network=driver)
         with stop_on_signals(session):
-            summary = teleop(opts, session=session, out=out)
+            summary = drive(session)
     elif input_ is InputKind.FOXGLOVE:
         from lfdfuse.sources.teleop.foxglove_server import FoxgloveLive
 
@@ -144,12 +209,12 @@ def teleop_cmd(
             console.print(
                 f"  layout: Layouts → Import from file… → {layout_path()}", soft_wrap=True, markup=False
             )
-            session = make_session(opts, inputs=[live])
+            session = make_session(opts, inputs=[live], network=driver)
             with (
                 stop_on_signals(session),
-                live_view(session, w, laser, status=lambda: _clients(live), reserve=5),
+                live_view(session, w, laser, status=status(session, lambda: _clients(live)), reserve=5),
             ):
-                summary = teleop(opts, session=session, out=out, sinks=[live])
+                summary = drive(session, (live,))
             console.print(f"  published {live.published} live messages")
     else:
         if not sys.stdin.isatty():
@@ -158,17 +223,41 @@ def teleop_cmd(
             )
         fd = sys.stdin.fileno()
         keys = TerminalKeys(fd)
-        session = make_session(opts, inputs=[keys])
-        with stop_on_signals(session), raw_input_mode(fd), live_view(session, w, laser, help_text=HELP):
-            summary = teleop(opts, session=session, out=out)
+        session = make_session(opts, inputs=[keys], network=driver)
+        with (
+            stop_on_signals(session),
+            raw_input_mode(fd),
+            live_view(session, w, laser, help_text=help_text, status=status(session)),
+        ):
+            summary = drive(session)
     print_run(summary.run, title=f"teleop {w.name} / {opts.input_name}")
     console.print(f"  ended      {summary.ended} ({summary.inputs} inputs)")
+    if result is not None:
+        c = result.report["correction"]
+        console.print(
+            f"  corrected  the person drove {c['person_ticks']} ticks ({c['takeovers']} takeovers),"
+            f" the network {c['network_ticks']}"
+        )
+        print_report(result.report, out=str(out))
+        if report is not None:
+            write_report(result.report, report)
     console.print(f"next: lfdfuse segment {out}")
 
 
 def layout_path() -> Path:
     """Where the shipped Foxglove layout is on this machine."""
     return Path(str(resources.files("lfdfuse") / LAYOUT))
+
+
+def _network_status(session: TeleopSession, driver: NetworkDriver) -> str:
+    """Who drives, the network's step, and its request for help when it has one."""
+    dec = driver.last
+    step = "-" if dec is None or dec.step is None else dec.step.name
+    line = f"driving: {session.authority.upper()}  (network step {step})"
+    ask = driver.asking
+    if ask is not None:
+        line += f"  NETWORK ASKS FOR HELP: step {ask.step}, BAC {ask.bac} ({ask.why})"
+    return line
 
 
 def _clients(live: Any) -> str:

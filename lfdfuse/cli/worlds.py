@@ -14,7 +14,8 @@ from lfdfuse.world.model import world_descriptions
 def worlds() -> None:
     """List the built-in worlds with a one-line description.
 
-    Example: lfdfuse worlds
+    Example:
+      lfdfuse worlds
     """
     table = Table(show_header=True, header_style="bold", box=None)
     table.add_column("world")

@@ -23,10 +23,11 @@ import numpy as np
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.baselines import arbitration_weights, nnls_weights
 from lfdfuse.estimate.identifiability import identifiable
-from lfdfuse.estimate.model import FusionModel, row_data, sum_cos
+from lfdfuse.estimate.model import CommandBins, FusionModel, make_row, row_loglik
 from lfdfuse.estimate.paper import Likelihood as LikelihoodName
 from lfdfuse.estimate.paper import PFParams, normalise, run_filter
 from lfdfuse.estimate.smc import SMCParams, TemperedSMC
+from lfdfuse.segment.commands import CommandMode
 
 #: one group's ``(vectors (T, n, 2), demo (T, 2))``
 Problem = tuple[np.ndarray, np.ndarray]
@@ -68,6 +69,7 @@ class EstimateOptions:
     smc: SMCParams = field(default_factory=SMCParams)  # pf: the sampler
     pf: PFParams = field(default_factory=PFParams)  # paper: the published filter
     min_samples: int = 30  # rows with fewer informative steps are flagged low_samples
+    commands: CommandMode = "auto"  # the command model: auto | continuous | discrete (DESIGN §6)
 
 
 @dataclass(frozen=True)
@@ -84,8 +86,11 @@ class RowEstimate:
 class Estimator:
     """A method's row estimator and the provenance entries it adds to the table."""
 
-    rows: Callable[[Sequence[Problem], EstimateOptions, np.random.Generator], list[RowEstimate]]
-    provenance: Callable[[EstimateOptions], dict[str, object]]
+    #: ``(problems, options, rng, bins)``: ``bins`` the discrete command model's command set or None
+    rows: Callable[
+        [Sequence[Problem], EstimateOptions, np.random.Generator, CommandBins | None], list[RowEstimate]
+    ]
+    provenance: Callable[[EstimateOptions, CommandBins | None], dict[str, object]]
 
 
 #: chains (rows × trials) per sampler pass: bounds the sampler's memory (chains × particles × κ nodes)
@@ -93,7 +98,7 @@ CHAIN_BATCH = 128
 
 
 def _pf_rows(
-    problems: Sequence[Problem], opts: EstimateOptions, rng: np.random.Generator
+    problems: Sequence[Problem], opts: EstimateOptions, rng: np.random.Generator, bins: CommandBins | None
 ) -> list[RowEstimate]:
     """One batched SMC pass over every problem with ≥ 2 behaviours and ≥ 1 step."""
     out: list[RowEstimate | None] = [None] * len(problems)
@@ -113,7 +118,7 @@ def _pf_rows(
     per_pass = max(1, CHAIN_BATCH // k)
     for b in range(0, len(todo), per_pass):
         batch = todo[b : b + per_pass]
-        datas = [row_data(*problems[i]) for i in batch]
+        datas = [make_row(*problems[i], bins) for i in batch]
         smc = TemperedSMC(datas, trials=k, model=opts.model, params=opts.smc, rng=rng)
         res = smc.run()
         means, covs, particles = res.mean(), res.cov(), res.weights
@@ -126,7 +131,9 @@ def _pf_rows(
                 # particle), which lands as close to the truth as a heading fit; a posterior mean
                 # is pulled off the simplex's edges, where sparse rows live, by the posterior's width
                 w = particles[j * k : (j + 1) * k, :, :n]  # (K, M, n)
-                best = np.array([trial[int(np.argmax(sum_cos(datas[j], trial)))] for trial in w])  # (K, n)
+                best = np.array(
+                    [trial[int(np.argmax(row_loglik(datas[j], trial, opts.model)))] for trial in w]
+                )  # (K, n)
             else:
                 # the data leaves a direction open: the posterior mean, where the prior decides it
                 best = means[j * k : (j + 1) * k, :n]
@@ -144,7 +151,7 @@ def _single(k: int) -> RowEstimate:
 
 
 def _paper_rows(
-    problems: Sequence[Problem], opts: EstimateOptions, rng: np.random.Generator
+    problems: Sequence[Problem], opts: EstimateOptions, rng: np.random.Generator, bins: CommandBins | None
 ) -> list[RowEstimate]:
     out = []
     k = opts.trials
@@ -160,11 +167,13 @@ def _paper_rows(
 
 def _fit_rows(
     fit: Callable[[np.ndarray, np.ndarray], np.ndarray],
-) -> Callable[[Sequence[Problem], EstimateOptions, np.random.Generator], list[RowEstimate]]:
+) -> Callable[
+    [Sequence[Problem], EstimateOptions, np.random.Generator, CommandBins | None], list[RowEstimate]
+]:
     """A heading fit per problem; ``trials > 1``: the mean and spread of bootstrap fits."""
 
     def rows(
-        problems: Sequence[Problem], opts: EstimateOptions, rng: np.random.Generator
+        problems: Sequence[Problem], opts: EstimateOptions, rng: np.random.Generator, bins: CommandBins | None
     ) -> list[RowEstimate]:
         out = []
         k = opts.trials
@@ -189,19 +198,20 @@ def _fit_rows(
     return rows
 
 
-def _pf_provenance(opts: EstimateOptions) -> dict[str, object]:
-    return {
-        "particles": opts.smc.particles,
-        "prior": f"dirichlet({opts.model.alpha:g})",
-        "noise": "vonmises, kappa marginalised",
-    }
+def _pf_provenance(opts: EstimateOptions, bins: CommandBins | None) -> dict[str, object]:
+    noise = (
+        "vonmises, kappa marginalised"
+        if bins is None
+        else f"vonmises heading in {bins.size} command bins, kappa marginalised, lapse {opts.model.lapse:g}"
+    )
+    return {"particles": opts.smc.particles, "prior": f"dirichlet({opts.model.alpha:g})", "noise": noise}
 
 
-def _paper_provenance(opts: EstimateOptions) -> dict[str, object]:
+def _paper_provenance(opts: EstimateOptions, bins: CommandBins | None) -> dict[str, object]:
     return {"particles": opts.pf.particles, "likelihood": opts.pf.likelihood}
 
 
-def _none(opts: EstimateOptions) -> dict[str, object]:
+def _none(opts: EstimateOptions, bins: CommandBins | None) -> dict[str, object]:
     return {}
 
 
@@ -234,10 +244,15 @@ def check_options(opts: EstimateOptions) -> None:
 
 
 def estimate_groups(
-    problems: Sequence[Problem], *, opts: EstimateOptions, rng: np.random.Generator
+    problems: Sequence[Problem],
+    *,
+    opts: EstimateOptions,
+    rng: np.random.Generator,
+    bins: CommandBins | None = None,
 ) -> list[RowEstimate]:
-    """Estimates for groups given as ``(vectors (T, n, 2), demo (T, 2))`` pairs, in order."""
-    return estimator(opts.method).rows(problems, opts, rng)
+    """Estimates for groups given as ``(vectors (T, n, 2), demo (T, 2))`` pairs, in order
+    (``bins``: the discrete command model's command set; only ``pf`` models it)."""
+    return estimator(opts.method).rows(problems, opts, rng, bins)
 
 
 def estimate_group(
@@ -247,7 +262,14 @@ def estimate_group(
     return estimate_groups([(vectors, demo)], opts=opts, rng=rng)[0]
 
 
-def provenance(opts: EstimateOptions, *, source: str) -> dict[str, object]:
+def provenance(
+    opts: EstimateOptions,
+    *,
+    source: str,
+    commands: str | None = None,
+    lag_s: str | None = None,
+    bins: CommandBins | None = None,
+) -> dict[str, object]:
     """The table's ``estimated_by``: method, trials, seed, source, and the method's own entries."""
     method = method_of(opts.method)
     by: dict[str, object] = {
@@ -256,4 +278,8 @@ def provenance(opts: EstimateOptions, *, source: str) -> dict[str, object]:
         "seed": opts.seed,
         "source": source,
     }
-    return by | REGISTRY[method].provenance(opts)
+    if commands is not None:
+        by["commands"] = commands
+    if lag_s is not None:  # the lag segment paired commands with (``segment_lag_s``)
+        by["lag_s"] = lag_s
+    return by | REGISTRY[method].provenance(opts, bins)

@@ -21,6 +21,39 @@ Given the applicable behaviours' vectors ``vₜₖ`` and the demonstrated unit h
 A zero fused vector points nowhere; it counts as ``cos Δ = 0`` (a 90° error). The von Mises
 loss ``1 − cos Δ`` is bounded, so a few wild steps (the teacher's safety reflex) cannot pull the
 weights far: the fitted ``κ`` drops instead.
+
+How people command: the ``discrete`` command model
+---------------------------------------------------
+
+The model above (``continuous``) reads each step's command through the inverse of the drive
+mapping: right for a scripted teacher, whose commands lie on that curve. A person at a keyboard
+(or at Foxglove's Teleop panel) has a handful of commands — turn in place left, arc left,
+straight, arc right, turn in place right — and holds each until the next press. For such a demo
+(``--commands discrete``) the observation is *which command the person chose*, at each decision:
+
+* **the command set** is the commands the demo actually holds that move forward or turn,
+  each standing for the heading the drive mapping gives it (an arc ``(0.4, 1.0)`` ≈ 38°, a turn
+  in place ≈ 90° or the saturation angle, whichever is larger), sorted by that heading;
+* **bins**: the person picks the command nearest to where the fused vector points, so command
+  ``c``'s bin is ``[b_c, b_{c+1})`` between the midpoints of neighbouring headings, the outer bins
+  reaching to ±π — turning in place means "beyond the arcs", in its direction;
+* **likelihood** of the observed command ``c_d`` at decision ``d``: the probability that the
+  noisy fused heading ``φ_d + ε`` falls in its bin, ``ε`` von Mises with concentration ``κ``
+  (``σ = 1/√κ`` log-uniform between ``discrete_sigma_min_deg`` and ``sigma_max_deg``, integrated
+  out on ``discrete_kappa_points`` nodes), mixed with a lapse ``λ`` (a press uniformly among the
+  ``m`` commands: a slip of the finger or the safety reflex cannot pull the weights far):
+  ``p(c_d | w, κ) = (1 − λ) P_κ(φ_d + ε ∈ bin(c_d)) + λ / m``; a zero fused vector puts the
+  heading anywhere (``P = bin width / 2π``);
+* **decisions, not ticks**: a decision is a step where the held command changes (a press), or
+  where the robot starts moving again after a stop or reverse; while a command is held the person
+  decides again every ``recheck_s`` seconds (looking and keeping the key is a decision too, at the
+  pace a person re-checks, not at the log's rate). The decisions depend only on the held command
+  over time: a log repeating the held command at 4 Hz and one sending it on key change give the
+  same decisions and the same posterior. Stops and reversing are counted (for
+  ``command_accuracy``) but carry no heading: the primitives steer a forward-moving robot.
+
+The prior on ``w`` is the same Dirichlet. The SMC sampler needs only ``log p(data | w)`` per
+particle (:func:`row_loglik`), so both command models share it.
 """
 
 from __future__ import annotations
@@ -41,6 +74,11 @@ class FusionModel:
     sigma_min_deg: float = 0.5  # range of the log-uniform prior on the heading noise σ = 1/√κ
     sigma_max_deg: float = 90.0
     kappa_points: int = 48  # quadrature nodes for integrating κ out
+    #: the discrete command model (see the module docstring)
+    discrete_sigma_min_deg: float = 2.0
+    discrete_kappa_points: int = 16
+    lapse: float = 0.02
+    recheck_s: float | None = 1.0  # a held command is decided again this often (None: only presses)
 
     @cached_property
     def kappas(self) -> np.ndarray:
@@ -53,6 +91,28 @@ class FusionModel:
         """``log(2π I₀(κ)) − κ`` per node ``(J,)`` (the scaled Bessel function keeps it finite)."""
         k = self.kappas
         return np.asarray(math.log(2.0 * math.pi) + np.log(i0e(k)))
+
+    @cached_property
+    def discrete_kappas(self) -> np.ndarray:
+        """Nodes ``(J,)`` of ``κ`` of the discrete model, equally spaced in ``log σ``."""
+        sig = np.radians(
+            np.geomspace(self.sigma_max_deg, self.discrete_sigma_min_deg, self.discrete_kappa_points)
+        )
+        return np.asarray(1.0 / sig**2)
+
+    @cached_property
+    def vm_cdf(self) -> np.ndarray:
+        """The von Mises CDF ``(J, G + 1)`` of each discrete ``κ`` node on a grid of ``[−π, π]``."""
+        x = np.linspace(-math.pi, math.pi, CDF_GRID + 1)
+        dens = np.exp(self.discrete_kappas[:, None] * (np.cos(x)[None, :] - 1.0))
+        c = np.concatenate(
+            [np.zeros((len(dens), 1)), np.cumsum(0.5 * (dens[:, 1:] + dens[:, :-1]), axis=1)], axis=1
+        )
+        return np.asarray(c / c[:, -1:])
+
+
+#: grid cells of the tabulated von Mises CDF over a full turn (0.18°: fine for σ ≥ 2°)
+CDF_GRID = 2048
 
 
 @dataclass(frozen=True)
@@ -74,6 +134,85 @@ class RowData:
     @property
     def size(self) -> int:
         return int(self.along.shape[1])
+
+
+@dataclass(frozen=True)
+class CommandBins:
+    """A discrete command set: the heading each command stands for, ascending, and their bins.
+
+    >>> b = CommandBins.from_headings([0.0, 0.66, -0.66, 1.57, -1.57])
+    >>> [round(float(e), 2) for e in b.edges]
+    [-3.14, -1.11, -0.33, 0.33, 1.11, 3.14]
+    >>> b.index(np.array([0.66, 1.57, 0.0])).tolist()
+    [3, 4, 2]
+    """
+
+    headings: tuple[float, ...]
+
+    @classmethod
+    def from_headings(
+        cls, headings: np.ndarray | list[float], merge_rad: float = math.radians(0.5)
+    ) -> CommandBins:
+        h = np.sort(np.asarray(headings, dtype=np.float64).ravel())
+        keep: list[float] = []
+        for x in h.tolist():
+            if not keep or x - keep[-1] > merge_rad:
+                keep.append(x)
+        return cls(tuple(keep))
+
+    @property
+    def size(self) -> int:
+        return len(self.headings)
+
+    @property
+    def edges(self) -> np.ndarray:
+        """``(m + 1,)`` bin edges from −π to π: midpoints between neighbouring headings."""
+        h = np.array(self.headings)
+        return np.concatenate([[-math.pi], 0.5 * (h[1:] + h[:-1]), [math.pi]])
+
+    def index(self, heading: np.ndarray) -> np.ndarray:
+        """The command whose heading is nearest each of ``heading (…)`` (rad)."""
+        h = np.array(self.headings)
+        return np.asarray(np.argmin(np.abs(np.asarray(heading)[..., None] - h), axis=-1))
+
+
+@dataclass(frozen=True)
+class DiscreteRowData:
+    """The decisions of one row: the behaviours' robot-frame components ``vx, vy (T, n)`` and the
+    observed command's bin ``lo, hi (T,)`` (rad, ``lo < hi``), out of ``commands`` commands."""
+
+    vx: np.ndarray
+    vy: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    commands: int
+
+    @property
+    def steps(self) -> int:
+        return int(self.vx.shape[0])
+
+    @property
+    def size(self) -> int:
+        return int(self.vx.shape[1])
+
+
+Row = RowData | DiscreteRowData
+
+
+def make_row(vectors: np.ndarray, demo: np.ndarray, bins: CommandBins | None = None) -> Row:
+    """The row data of either command model: continuous without ``bins``, else discrete, where
+    each demonstrated heading is the command nearest it in the set and the row holds its bin."""
+    if bins is None:
+        return row_data(vectors, demo)
+    c = bins.index(np.arctan2(demo[:, 1], demo[:, 0]))
+    e = bins.edges
+    return DiscreteRowData(
+        np.ascontiguousarray(vectors[..., 0]),
+        np.ascontiguousarray(vectors[..., 1]),
+        e[c],
+        e[c + 1],
+        bins.size,
+    )
 
 
 def row_data(vectors: np.ndarray, demo: np.ndarray) -> RowData:
@@ -107,6 +246,45 @@ def sum_cos(data: RowData, w: np.ndarray) -> np.ndarray:
         r = np.hypot(a, b)
         s += (a / np.maximum(r, 1e-12)).sum(axis=0)
     return s
+
+
+def _cdf_at(x: np.ndarray, table: np.ndarray) -> np.ndarray:
+    """The tabulated CDFs ``table (J, G + 1)`` at ``x (…)`` in ``[−π, π]`` → ``(J, …)`` (linear)."""
+    pos = (np.clip(x, -math.pi, math.pi) + math.pi) * (CDF_GRID / (2.0 * math.pi))
+    i = np.minimum(pos.astype(np.int64), CDF_GRID - 1)
+    f = pos - i
+    lo = table[:, i]
+    return np.asarray(lo + f * (table[:, i + 1] - lo))
+
+
+def discrete_log_marginal(data: DiscreteRowData, w: np.ndarray, model: FusionModel) -> np.ndarray:
+    """``log p(c₁…c_T | w)`` of the discrete model, ``κ`` integrated out: ``w (P, n)`` → ``(P,)``."""
+    wt = np.ascontiguousarray(w.T)
+    table = model.vm_cdf
+    j = table.shape[0]
+    ll = np.zeros((j, w.shape[0]))
+    block = max(16, BLOCK_ELEMENTS // max(1, w.shape[0] * j))
+    lapse = model.lapse / max(1, data.commands)
+    for c in range(0, data.steps, block):
+        a = data.vx[c : c + block] @ wt
+        b = data.vy[c : c + block] @ wt
+        phi = np.arctan2(b, a)
+        width = (data.hi[c : c + block] - data.lo[c : c + block])[:, None]
+        lo = np.remainder(data.lo[c : c + block, None] - phi + math.pi, 2.0 * math.pi) - math.pi
+        hi = lo + width
+        wrap = hi > math.pi
+        p = _cdf_at(np.where(wrap, hi - 2.0 * math.pi, hi), table) + wrap - _cdf_at(lo, table)
+        zero = np.hypot(a, b) <= 1e-12
+        p = np.where(zero, width / (2.0 * math.pi), p)
+        ll += np.log((1.0 - model.lapse) * np.clip(p, 0.0, 1.0) + lapse).sum(axis=1)
+    return np.asarray(logsumexp(ll, axis=0) - math.log(j))
+
+
+def row_loglik(data: Row, w: np.ndarray, model: FusionModel) -> np.ndarray:
+    """``log p(data | w)`` with the noise integrated out, for weights ``w (P, n)`` → ``(P,)``."""
+    if isinstance(data, DiscreteRowData):
+        return discrete_log_marginal(data, w, model)
+    return log_marginal(sum_cos(data, w), data.steps, model)
 
 
 def log_marginal(s: np.ndarray, steps: np.ndarray | int, model: FusionModel) -> np.ndarray:

@@ -16,13 +16,15 @@ Reading the log and refining the table with sub-goals are the caller's (:mod:`lf
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
+from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.baselines import angle_errors
+from lfdfuse.estimate.commands import commands_of
 from lfdfuse.estimate.methods import (
     EstimateOptions,
     Method,
@@ -31,6 +33,18 @@ from lfdfuse.estimate.methods import (
     estimate_group,
     estimate_groups,
     provenance,
+)
+from lfdfuse.estimate.model import CommandBins
+from lfdfuse.estimate.pool import (
+    DEFAULT,
+    ROW,
+    Alignment,
+    PooledGroup,
+    align,
+    pooled_groups,
+    problem_of,
+    row_rng,
+    same_behaviors,
 )
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step, default_weights_for
 from lfdfuse.segment.read import SegmentedRun
@@ -43,7 +57,9 @@ __all__ = [
     "SegmentSteps",
     "estimate_group",
     "estimate_groups",
+    "estimate_pooled",
     "estimate_run",
+    "estimate_runs",
     "estimate_segments",
     "groups_of",
     "step_names",
@@ -119,14 +135,20 @@ class SegmentSteps:
     default_weights: dict[str, float] | None  # the table's default fit (when asked), None: too few steps
     groups: int
     skipped: int  # groups with no informative step
+    commands: str  # the command model the rows were estimated with: continuous | discrete
+    bins: CommandBins | None  # its command set (discrete)
 
 
 def estimate_segments(
     run: SegmentedRun, *, opts: EstimateOptions, rng: np.random.Generator, table_default: bool = True
 ) -> SegmentSteps:
     """Estimate every group of ``run.segments`` and each segment's default fit (and the table's,
-    with ``table_default``) in one pass of the method."""
+    with ``table_default``) in one pass of the method. A discrete command model (a person at a
+    keyboard) observes each decision once, not each tick it was held (DESIGN §6)."""
     check_options(opts)
+    cm = commands_of(run, requested=opts.commands, recheck_s=opts.model.recheck_s)
+    if cm.decisions is not None:  # discrete: one observation per decision, not per tick
+        run = replace(run, informative=run.informative & cm.decisions)
     groups = groups_of(run)
     live = [g for g in groups if len(g.steps)]
     problems = [(run.vectors[g.steps][:, list(g.behaviors), :], run.demo[g.steps]) for g in live]
@@ -144,7 +166,7 @@ def estimate_segments(
             hit = len(uniq) - 1
         slot.append(hit)
     problems += [(run.vectors[s][:, idx, :], run.demo[s]) for s in uniq]
-    est = estimate_groups(problems, opts=opts, rng=rng)
+    est = estimate_groups(problems, opts=opts, rng=rng, bins=cm.bins)
     rows: dict[int, list[FusionRow]] = {s.index: [] for s in run.segments}
     for g, e, (vec, demo) in zip(live, est, problems, strict=False):
         err = float(np.degrees(angle_errors(vec, demo, e.weights).mean()))
@@ -182,13 +204,212 @@ def estimate_segments(
         for i, (nm, goal, s) in enumerate(zip(step_names(goals), goals, run.segments, strict=True))
     )
     return SegmentSteps(
-        steps, default(slot[0]) if table_default else None, len(groups), len(groups) - len(live)
+        steps,
+        default(slot[0]) if table_default else None,
+        len(groups),
+        len(groups) - len(live),
+        cm.mode,
+        cm.bins,
     )
 
 
 def run_rng(run: SegmentedRun, opts: EstimateOptions) -> np.random.Generator:
-    """The estimate's random stream: the seed and the run's length (a demo and its part differ)."""
+    """The random stream of :func:`estimate_segments` (sub-goal refinement): the seed and the
+    run's length (a demo and its part differ)."""
     return np.random.default_rng([opts.seed, len(run.t_ns)])
+
+
+# ------------------------------------------------------------------------------ pooled demos
+
+
+@dataclass(frozen=True)
+class PooledSteps:
+    """The network steps of one or more demos (:mod:`lfdfuse.estimate.pool`) and what it took."""
+
+    steps: tuple[Step, ...]
+    default_weights: dict[str, float] | None  # the table's default fit, None: too few steps
+    groups: int  # (step, BAC) rows any demo met
+    skipped: int  # rows with no informative step
+    alignment: Alignment
+    commands: str  # the first demo's command model (continuous | discrete)
+    bins: CommandBins | None  # its command set (discrete), used for the pooled rows too
+
+
+def _row(
+    g: PooledGroup,
+    runs: Sequence[SegmentedRun],
+    parts: Sequence[tuple[int, np.ndarray]],
+    opts: EstimateOptions,
+    bins: CommandBins | None,
+) -> tuple[RowEstimate, float]:
+    """One row's estimate on ``parts`` (its own random stream) and its mean heading error (°)."""
+    vec, demo = problem_of(parts, runs, g.behaviors)
+    e = estimate_groups([(vec, demo)], opts=opts, rng=row_rng(opts.seed, ROW, g.step, g.bac), bins=bins)[0]
+    err = float(np.degrees(angle_errors(vec, demo, e.weights).mean()))
+    return e, err if math.isfinite(err) else 180.0
+
+
+def _default_parts(
+    runs: Sequence[SegmentedRun], al: Alignment, opts: EstimateOptions
+) -> tuple[list[int], list[list[tuple[int, np.ndarray]] | None]]:
+    """The goal-free behaviours, and per default fit (the table's, then each step's) its parts or
+    None: as :func:`_default_masks`, over the demos pooled (the counts are the pooled ones)."""
+    names = runs[0].names
+    idx = [i for i, n in enumerate(names) if not n.startswith("attract_")]
+    bases = [
+        r.informative & r.applicable[:, idx].any(axis=1) if idx else np.zeros_like(r.informative)
+        for r in runs
+    ]
+    out: list[list[tuple[int, np.ndarray]] | None] = []
+    for step in (None, *range(len(al.goals))):
+        parts: list[tuple[int, np.ndarray]] = []
+        seen = 0
+        for d, (run, base) in enumerate(zip(runs, bases, strict=True)):
+            if step is None:
+                within = np.ones(len(run.t_ns), dtype=bool)
+            else:
+                mine = [s.index for s, j in zip(run.segments, al.step_of[d], strict=True) if j == step]
+                within = np.isin(run.segment_of, mine)
+                seen += int((within & run.informative).sum())
+            steps = np.nonzero(base & within)[0]
+            if len(steps):
+                parts.append((d, steps))
+        total = sum(len(s) for _, s in parts)
+        few = step is not None and seen < opts.min_samples
+        out.append(parts if idx and not few and total >= opts.min_samples else None)
+    return idx, out
+
+
+def estimate_pooled(
+    runs: Sequence[SegmentedRun],
+    *,
+    opts: EstimateOptions,
+    progress: Callable[[float, float], None] | None = None,
+) -> PooledSteps:
+    """Estimate the rows of one or more demos pooled (:mod:`lfdfuse.estimate.pool`).
+
+    The first demo is estimated as it would be alone (:func:`estimate_segments`, one pass); a
+    row or default fit the other demos add steps to is estimated again on the pooled steps, on its
+    own random stream (:func:`~lfdfuse.estimate.pool.row_rng`), and carries ``samples_added`` and
+    ``weights_before`` (the first demo's alone). So one demo gives the table it always gave, and
+    a row no further demo touched comes out bit-identical to the first demo's.
+    """
+    check_options(opts)
+    al = align(runs)
+    base = estimate_segments(runs[0], opts=opts, rng=run_rng(runs[0], opts))
+    # the first demo's rows and per-step defaults by pooled step
+    own: dict[tuple[int, int], FusionRow] = {}
+    own_default: dict[int, dict[str, float] | None] = {}
+    for st, j in zip(base.steps, al.step_of[0], strict=True):
+        own_default[j] = st.default_weights
+        for r in st.fusion:
+            own[(j, r.bac)] = r
+    groups = pooled_groups(runs, al)
+    live = [g for g in groups if g.samples]
+    idx, dparts = _default_parts(runs, al, opts)
+    redo = [g for g in live if g.samples != g.samples_of(0)]
+    total, done = max(1, len(redo)), 0
+    names = runs[0].names
+    rows: dict[int, list[FusionRow]] = {i: [] for i in range(len(al.goals))}
+    for g in live:
+        if g.samples == g.samples_of(0):
+            rows[g.step].append(own[(g.step, g.bac)])
+            continue
+        e, err = _row(g, runs, [p for p in g.parts if len(p[1])], opts, base.bins)
+        app = [names[i] for i in g.behaviors]
+        before = own.get((g.step, g.bac))
+        rows[g.step].append(
+            FusionRow(
+                bac=g.bac,
+                weights={nm: float(x) for nm, x in zip(app, e.weights, strict=True)},
+                std={nm: float(x) for nm, x in zip(app, e.std, strict=True)},
+                samples=g.samples,
+                fit_error_deg=err,
+                low_samples=g.samples < opts.min_samples,
+                trial_std=None
+                if e.trial_std is None
+                else {nm: float(x) for nm, x in zip(app, e.trial_std, strict=True)},
+                identifiable=e.identifiable,
+                samples_added=g.samples - g.samples_of(0),
+                weights_before=None if before is None else dict(before.weights),
+            )
+        )
+        done += 1
+        if progress is not None:
+            progress(float(done), float(total))
+    fits: list[dict[str, float] | None] = []
+    for j, parts in enumerate(dparts):
+        if parts is None:
+            fits.append(None)
+            continue
+        if all(d == 0 for d, _ in parts):  # the first demo's own fit (the table's, or its step's)
+            fits.append(base.default_weights if j == 0 else own_default.get(j - 1))
+            continue
+        same = next((i for i in range(j) if _same_parts(dparts[i], parts)), None)
+        if same is not None:
+            fits.append(fits[same])
+            continue
+        vec, demo = problem_of(parts, runs, idx)
+        e = estimate_groups([(vec, demo)], opts=opts, rng=row_rng(opts.seed, DEFAULT, j), bins=base.bins)[0]
+        fit = {names[i]: round(float(x), 4) for i, x in zip(idx, e.weights, strict=True) if x >= 1e-4}
+        fits.append(fit or None)
+    if progress is not None:
+        progress(float(total), float(total))
+    goals = [g[len("attract_") :] if g and g.startswith("attract_") else None for g in al.goals]
+    steps = tuple(
+        Step(nm, goal, tuple(rows[i]), None, fits[1 + i])
+        for i, (nm, goal) in enumerate(zip(step_names(goals), goals, strict=True))
+    )
+    return PooledSteps(steps, fits[0], len(groups), len(groups) - len(live), al, base.commands, base.bins)
+
+
+def _same_parts(a: list[tuple[int, np.ndarray]] | None, b: list[tuple[int, np.ndarray]] | None) -> bool:
+    if a is None or b is None or len(a) != len(b):
+        return False
+    return all(da == db and np.array_equal(sa, sb) for (da, sa), (db, sb) in zip(a, b, strict=True))
+
+
+def estimate_runs(
+    runs: Sequence[SegmentedRun],
+    *,
+    opts: EstimateOptions,
+    names: Sequence[str],
+    progress: Callable[[float, float], None] | None = None,
+) -> tuple[FusionTable, int, int]:
+    """The fusion table of one or more segmented runs pooled (named ``names``, the first names the
+    network); returns it with the row and skipped counts. Several demos must share their
+    behaviour set; the provenance lists them (``sources``)."""
+    if not runs or len(runs) != len(names):
+        raise ConfigError("estimate needs at least one demonstration")
+    why = same_behaviors(runs, names)
+    if why is not None:
+        raise ConfigError(why)
+    # a demo without one informative step (no key pressed, only stops and reversing) has nothing
+    # to learn from: an error, not a table of default weights that looks like a result
+    if not any(len(g.steps) for run in runs for g in groups_of(run)):
+        steps = sum(len(run.t_ns) for run in runs)
+        raise ConfigError(
+            f"{names[0]}: nothing to learn: none of its {steps} steps carries a heading with a"
+            " behaviour applicable (standing still and reversing carry no heading); drive the robot"
+            " forward or turning while teaching"
+        )
+    est = estimate_pooled(runs, opts=opts, progress=progress)
+    by = provenance(
+        opts,
+        source=names[0],
+        commands=est.commands,
+        lag_s=runs[0].metadata.get("segment_lag_s"),
+        bins=est.bins,
+    )
+    if len(runs) > 1:
+        by["sources"] = list(names)
+    table = FusionTable(
+        runs[0].names,
+        est.default_weights or default_weights_for(runs[0].names),
+        Network(Path(names[0]).stem.split(".")[0], est.steps),
+        by,
+    )
+    return table, est.groups, est.skipped
 
 
 def estimate_run(
@@ -199,13 +420,4 @@ def estimate_run(
     progress: Callable[[float, float], None] | None = None,
 ) -> tuple[FusionTable, int, int]:
     """The fusion table of a segmented run; returns it with the group and skipped counts."""
-    est = estimate_segments(run, opts=opts, rng=run_rng(run, opts))
-    if progress is not None:
-        progress(1.0, 1.0)
-    table = FusionTable(
-        run.names,
-        est.default_weights or default_weights_for(run.names),
-        Network(Path(name).stem.split(".")[0], est.steps),
-        provenance(opts, source=name),
-    )
-    return table, est.groups, est.skipped
+    return estimate_runs([run], opts=opts, names=[name], progress=progress)

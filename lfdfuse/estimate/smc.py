@@ -17,7 +17,8 @@ number of steps in the row — nothing is forgotten and nothing is replayed.
 
 Rows of different sizes share one pass: the particle arrays are padded to the largest row's
 behaviours (masked out of the simplex); only the likelihood loops over rows, one matrix product
-each.
+each. The model enters only through ``log p(data | w)`` per particle
+(:func:`~lfdfuse.estimate.model.row_loglik`): continuous and discrete rows share a pass.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import logsumexp
 
-from lfdfuse.estimate.model import FusionModel, RowData, log_marginal, log_prior_alr, sample_prior, sum_cos
+from lfdfuse.estimate.model import FusionModel, Row, log_prior_alr, row_loglik, sample_prior
 from lfdfuse.estimate.resampling import ess, gather, resample
 
 
@@ -70,20 +71,21 @@ class SMCResult:
 
 
 class _Rows:
-    """The rows' steps; ``S`` per row in blocks of steps (one BLAS product per block)."""
+    """The rows' data; ``log p(data | w)`` per row (one BLAS product per block of steps)."""
 
-    def __init__(self, rows: Sequence[RowData]) -> None:
+    def __init__(self, rows: Sequence[Row], model: FusionModel) -> None:
         self.rows = list(rows)
         self.sizes = [r.size for r in rows]
+        self.model = model
 
-    def sum_cos(self, w: np.ndarray, active: np.ndarray) -> np.ndarray:
-        """``S (R, P)`` for weights ``w (R, P, n)``; rows not ``active (R,)`` are left at 0.
+    def loglik(self, w: np.ndarray, active: np.ndarray) -> np.ndarray:
+        """``log p (R, P)`` for weights ``w (R, P, n)``; rows not ``active (R,)`` are left at 0.
 
         A batched 3-D product is an order of magnitude slower here than a loop of 2-D ones.
         """
         out = np.zeros(w.shape[:2])
         for i in np.nonzero(active)[0]:
-            out[i] = sum_cos(self.rows[i], w[i, :, : self.sizes[i]])
+            out[i] = row_loglik(self.rows[i], w[i, :, : self.sizes[i]], self.model)
         return out
 
 
@@ -92,7 +94,7 @@ class TemperedSMC:
 
     def __init__(
         self,
-        rows: Sequence[RowData],
+        rows: Sequence[Row],
         *,
         trials: int,
         model: FusionModel,
@@ -109,7 +111,7 @@ class TemperedSMC:
         self.steps = np.repeat(np.array([r.steps for r in rows], dtype=np.float64), trials)
         size = np.repeat(np.array([r.size for r in rows]), trials)
         self.mask = np.arange(n)[None, :] < size[:, None]  # (C, n)
-        self.data = _Rows(rows)
+        self.data = _Rows(rows, model)
         c, m = len(self.steps), params.particles
         self.logw = sample_prior((c, m), self.mask[:, None, :], model, rng)
         self.ll = self._loglik(self.logw, np.ones(c, dtype=bool))
@@ -129,8 +131,7 @@ class TemperedSMC:
         k = self.trials
         w = np.exp(logw).reshape(self.rows_n, k * m, n)
         act_rows = np.asarray(active.reshape(self.rows_n, k).any(axis=1))
-        s = self.data.sum_cos(w, act_rows).reshape(c, m)
-        ll = log_marginal(s, self.steps[:, None], self.model)
+        ll = self.data.loglik(w, act_rows).reshape(c, m)
         return np.where(active[:, None], ll, 0.0)
 
     # ------------------------------------------------------------------ the algorithm

@@ -11,6 +11,12 @@ heading is reported per method, with a bootstrap interval:
 * ``oracle`` – the default estimator fitted on the held-out steps themselves: the floor for
   any fusion of these primitives on those steps.
 
+For a demo of the discrete command model (a person at a keyboard, DESIGN §6) the held-out
+*decisions* (:func:`~lfdfuse.estimate.commands.decision_steps`) are scored too: a method
+predicts the command whose bin holds its predicted heading, ``straight`` always the most common
+command of the training decisions, ``previous`` the command held before the decision; a stop or
+a reverse is a command no fusion predicts. ``command_accuracy`` is the share predicted right.
+
 Predictions use the weights the runtime would use (DESIGN §8): the step's row for the BAC, else
 the step's default weights, else the table's; a held-out goal segment that training never
 reached uses the table's default weights.
@@ -26,6 +32,8 @@ from typing import Any
 import numpy as np
 
 from lfdfuse.errors import ConfigError
+from lfdfuse.estimate.commands import commands_of
+from lfdfuse.estimate.model import CommandBins
 from lfdfuse.estimate.pipeline import EstimateOptions, Method, estimate_run
 from lfdfuse.estimate.replay import fused_vectors
 from lfdfuse.network.table import FusionTable
@@ -41,6 +49,7 @@ class MethodScore:
     ci95_deg: tuple[float, float]  # bootstrap interval of that mean
     median_deg: float
     turning_error_deg: float  # the same mean over steps where the teacher turned (|heading| ≥ 10°)
+    command_accuracy: float | None = None  # discrete logs: share of held-out decisions predicted
 
 
 #: a held-out step counts as a turn when the demonstrated heading is at least this far off straight
@@ -55,6 +64,10 @@ class Evaluation:
     holdout: float
     lag_s: float | None  # the command lag the demo was segmented with (metadata), if known
     methods: dict[str, MethodScore] = field(default_factory=dict)
+    commands: str = "continuous"  # the command model of the demo
+    test_decisions: int | None = None  # discrete logs: held-out decisions scored
+    #: distinct demonstrated headings (to 0.1°) among the held-out steps; 1: one constant command
+    held_out_headings: int | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -63,12 +76,23 @@ class Evaluation:
             "turning_steps": self.turning_steps,
             "holdout": self.holdout,
             "lag_s": self.lag_s,
+            "commands": self.commands,
+            **({} if self.test_decisions is None else {"test_decisions": self.test_decisions}),
+            "held_out_headings": self.held_out_headings,
             "methods": {
                 name: {
                     "heading_error_deg": round(s.heading_error_deg, 3),
                     "ci95_deg": [round(s.ci95_deg[0], 3), round(s.ci95_deg[1], 3)],
                     "median_deg": round(s.median_deg, 3),
-                    "turning_error_deg": round(s.turning_error_deg, 3),
+                    # no turn held out: null, not NaN (which is not JSON)
+                    "turning_error_deg": None
+                    if math.isnan(s.turning_error_deg)
+                    else round(s.turning_error_deg, 3),
+                    **(
+                        {}
+                        if s.command_accuracy is None
+                        else {"command_accuracy": round(s.command_accuracy, 4)}
+                    ),
                 }
                 for name, s in self.methods.items()
             },
@@ -113,6 +137,8 @@ def _score(
     errors_rad: np.ndarray, turning: np.ndarray, rng: np.random.Generator, resamples: int = 1000
 ) -> MethodScore:
     e = np.degrees(np.abs(errors_rad))
+    if len(e) == 0:  # a discrete log may hold decisions but no informative held-out step
+        return MethodScore(math.nan, (math.nan, math.nan), math.nan, math.nan)
     boots = e[rng.integers(0, len(e), (resamples, len(e)))].mean(axis=1)
     lo, hi = np.percentile(boots, [2.5, 97.5])
     turn = float(e[turning].mean()) if turning.any() else math.nan
@@ -139,19 +165,35 @@ def evaluate(
     train, test = slice_run(run, 0, cut), slice_run(run, cut, n)
     test_steps = np.nonzero(test.informative)[0]
     n_train = int(train.informative.sum())
-    if n_train < 10 or len(test_steps) < 10:
-        raise ConfigError(
-            f"too few informative steps to evaluate ({n_train} to train, {len(test_steps)} held out; need 10 each)"
-        )
     base = opts or EstimateOptions(seed=seed)
+    cm = commands_of(run, requested=base.commands, recheck_s=base.model.recheck_s)
+    if cm.decisions is None:
+        if n_train < 10 or len(test_steps) < 10:
+            raise ConfigError(
+                f"too few informative steps to evaluate ({n_train} to train, {len(test_steps)} held out; need 10 each)"
+            )
+    else:
+        d_train, d_test = (
+            int((cm.decisions[:cut] & run.informative[:cut]).sum()),
+            int(cm.decisions[cut:].sum()),
+        )
+        if d_train < 10 or d_test < 10:
+            raise ConfigError(
+                f"too few decisions to evaluate ({d_train} informative to train, {d_test} held out; need 10 each)"
+            )
     demo = np.arctan2(test.demo[test_steps, 1], test.demo[test_steps, 0])
     offset = int(test.segment_of[0]) if len(test.segment_of) else 0
     predictions: dict[str, np.ndarray] = {}
     fits = [("fused", train, base), ("nnls", train, replace(base, method=Method.NNLS))]
     fits += [("arbitration", train, replace(base, method=Method.ARBITRATION)), ("oracle", test, base)]
+    decided = np.zeros(0, dtype=np.int64) if cm.decisions is None else np.nonzero(cm.decisions[cut:])[0]
+    chosen: dict[str, np.ndarray] = {}
     for k, (name, part, eo) in enumerate(fits):
         table, _, _ = estimate_run(part, opts=eo, name=name)
         predictions[name] = predict(table, test, test_steps, segment_offset=offset if part is test else 0)
+        if cm.bins is not None:
+            at = predict(table, test, decided, segment_offset=offset if part is test else 0)
+            chosen[name] = bin_of(cm.bins, at)
         if progress is not None:
             progress(k + 1.0, len(fits) + 1.0)
     predictions["straight"] = np.zeros(len(test_steps))
@@ -163,6 +205,17 @@ def evaluate(
     rng = np.random.default_rng(seed)
     turning = np.abs(demo) >= TURN_RAD
     scores = {name: _score(_wrap(predictions[name] - demo), turning, rng) for name in METHODS}
+    if cm.bins is not None and cm.decisions is not None:
+        truth = command_of(cm.bins, run)
+        train_d = truth[:cut][cm.decisions[:cut]]
+        values, counts = np.unique(train_d, return_counts=True)
+        chosen["straight"] = np.full(len(decided), values[int(np.argmax(counts))] if len(values) else -1)
+        chosen["previous"] = truth[np.maximum(decided + cut - 1, 0)]
+        actual = truth[decided + cut]
+        scores = {
+            name: replace(s, command_accuracy=float((chosen[name] == actual).mean()))
+            for name, s in scores.items()
+        }
     lag = run.metadata.get("segment_lag_s")
     return Evaluation(
         train_steps=n_train,
@@ -171,13 +224,35 @@ def evaluate(
         holdout=holdout,
         lag_s=float(lag) if lag is not None else None,
         methods=scores,
+        commands=cm.mode,
+        test_decisions=None if cm.decisions is None else len(decided),
+        held_out_headings=len(np.unique(np.round(np.degrees(demo), 1))),
     )
+
+
+def bin_of(bins: CommandBins, heading: np.ndarray) -> np.ndarray:
+    """The command whose bin holds each heading (rad): the one a person would press."""
+    e = bins.edges
+    return np.clip(np.searchsorted(e, _wrap(heading), side="right") - 1, 0, bins.size - 1)
+
+
+def command_of(bins: CommandBins, run: SegmentedRun) -> np.ndarray:
+    """The command held at each step: its index in ``bins``, −1 for a stop or a reverse."""
+    h = np.arctan2(run.demo[:, 1], run.demo[:, 0])
+    return np.where(run.informative, bins.index(h), -1)
 
 
 def reading(ev: Evaluation) -> list[str]:
     """What the numbers mean, in plain sentences (the CLI prints them under the table)."""
     m = {k: v.heading_error_deg for k, v in ev.methods.items()}
     lines = []
+    if ev.held_out_headings == 1:
+        lines.append(
+            "the held-out part is one constant command (every step the same heading): the scores"
+            " mean little; hold out more (--holdout) or demonstrate more varied driving."
+        )
+    if not ev.turning_steps:
+        lines.append("no held-out step turned (≥ 10° off ahead): there is no turn score.")
     gap = m["fused"] - m["oracle"]
     lines.append(
         f"fused is {gap:.1f}° above the oracle (the best fusion of these primitives on the held-out steps)."

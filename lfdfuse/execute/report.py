@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from lfdfuse.files import write_text_atomic
+from lfdfuse.network.driver import HelpRequest
 from lfdfuse.sim.loop import RunSummary
 
 
@@ -19,11 +21,13 @@ def build_report(
     side: dict[str, list[tuple[float, float]]],
     unseen_ticks: int,
     reflex_ticks: int,
+    help: Sequence[HelpRequest] = (),
 ) -> dict[str, Any]:
     """The report of DESIGN §8 from a run and the network's per-step side ranges.
 
     ``goals`` are the table's ``(step name, target)`` in order; a network without goals has
-    nothing to complete (``completed: null``).
+    nothing to complete (``completed: null``). ``help`` (an extension: a key old readers ignore)
+    lists where the network asked for help, each ``{t_s, step, bac, why}``.
     """
     reached_at = list(summary.reached)
     goal_rows = []
@@ -62,6 +66,7 @@ def build_report(
         "right_range_mean_m": round(summary.right_range_mean_m, 3),
         "unseen_bac_fraction": round(unseen_ticks / max(active_ticks, 1), 4),
         "reflex_fraction": round(reflex_ticks / max(active_ticks, 1), 4),
+        "help": [{"t_s": round(h.t_s, 2), "step": h.step, "bac": h.bac, "why": h.why} for h in help],
     }
 
 
@@ -88,11 +93,31 @@ def corridor_style(left_m: np.ndarray, right_m: np.ndarray, *, sight_m: float = 
 
 
 def _style_words(step: dict[str, Any]) -> str:
-    """``step free (no goal) keeps the wall on its left`` — what a step's corridor style means."""
+    """``keeps the wall on its left`` — what a step's corridor style means."""
     style = step.get("style", "unknown")
     side = {"left": "keeps the wall on its left", "right": "keeps the wall on its right"}
-    words = side.get(style, "keeps to the centre" if style in ("center", "centre") else f"keeps {style}")
-    return f"step {step['name']} {words}"
+    if style in ("center", "centre"):
+        return "keeps to the centre"
+    # unknown: the step never drove with both walls within 2 m (or never ran)
+    return side.get(style, f"keeps {style}" if style != "unknown" else "has no measured style")
+
+
+def _styles(steps: list[dict[str, Any]]) -> list[str]:
+    """Each step's style in words; consecutive steps of one style share one phrase."""
+    out: list[tuple[list[str], str]] = []
+    for s in steps:
+        words = _style_words(s)
+        if out and out[-1][1] == words:
+            out[-1][0].append(s["name"])
+        else:
+            out.append(([s["name"]], words))
+    plural = {"keeps": "keep", "has": "have"}
+    return [
+        f"step {n[0]} {w}"
+        if len(n) == 1
+        else f"steps {', '.join(n)} {plural[w.split()[0]]} {w.split(' ', 1)[1]}"
+        for n, w in out
+    ]
 
 
 def verdict(report: dict[str, Any]) -> str:
@@ -103,7 +128,22 @@ def verdict(report: dict[str, Any]) -> str:
         parts.append(
             f"task {'completed' if report['completed'] else 'NOT completed'} ({done}/{len(report['goals'])} goals)"
         )
-    styles = [_style_words(s) for s in report["steps"]]
+    styles = _styles(report["steps"])
     parts.append("; ".join(styles) if styles else "no step ran")
     parts.append(f"{report['collisions']} collisions")
     return ", ".join(parts)
+
+
+def help_line(report: dict[str, Any], *, shown: int = 3) -> str | None:
+    """Where the network asked for help, in one line (None when it never did)::
+
+    asked for help 2 times: step reach-red at 12.3 s (BAC 5: unseen BAC), …
+    """
+    asks = report.get("help") or []
+    if not asks:
+        return None
+    first = ", ".join(
+        f"step {h['step']} at {h['t_s']:.1f} s (BAC {h['bac']}: {h['why']})" for h in asks[:shown]
+    )
+    more = f", and {len(asks) - shown} more" if len(asks) > shown else ""
+    return f"asked for help {len(asks)} time{'s' if len(asks) != 1 else ''}: {first}{more}"

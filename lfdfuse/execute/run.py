@@ -2,7 +2,8 @@
 
 Also the network teacher of ``simulate`` (a known table as ground truth, without the ``/lfd``
 channels). Besides the raw channels, :class:`LfdRecorder` logs every tick's behaviour outputs,
-BAC, active step, fused vector and an overlay of one arrow per weighted behaviour.
+BAC, active step, fused vector and an overlay of one arrow per weighted behaviour, and on
+``/lfd/network`` each request for help (a BAC the table has no row for, or an unidentifiable row).
 """
 
 from __future__ import annotations
@@ -93,6 +94,11 @@ class LfdRecorder:
         ]
         arrows.append(msg.Arrow(float(dec.fused[0]), float(dec.fused[1]), (1.0, 1.0, 1.0), 1.5))
         log.write("/lfd/overlay", t_ns, msg.arrow_scene(t_ns, "fusion", arrows))
+        ask = self.driver.help_now
+        if ask is not None:
+            log.write_raw(
+                "/lfd/network", t_ns, lfd.encode_help(t_ns, step=ask.step, bac=ask.bac, why=ask.why)
+            )
 
 
 @dataclass(frozen=True)
@@ -115,7 +121,7 @@ class ExecuteResult:
     report: dict[str, Any]
 
 
-def _goal_list(table: FusionTable) -> list[tuple[str, str]]:
+def goal_list(table: FusionTable) -> list[tuple[str, str]]:
     out: list[tuple[str, str]] = []
 
     def walk(net: Any) -> None:
@@ -175,9 +181,10 @@ def drive_table(
         )
     report = build_report(
         summary,
-        goals=_goal_list(opts.table),
+        goals=goal_list(opts.table),
         side=driver.side,
         unseen_ticks=driver.unseen_ticks,
         reflex_ticks=driver.reflex_ticks,
+        help=driver.help,
     )
     return ExecuteResult(summary, report)

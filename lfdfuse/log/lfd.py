@@ -41,6 +41,12 @@ EXECUTE_TOPICS: dict[str, str] = {
     "/lfd/step": "lfdfuse.NetworkStep",
     "/lfd/fused": "lfdfuse.FusedVector",
     "/lfd/overlay": "foxglove.SceneUpdate",
+    "/lfd/network": "lfdfuse.NetworkEvent",
+}
+
+#: channels that ``teleop --table`` adds beside execute's (a contract; ``drive`` may write it too)
+CORRECTION_TOPICS: dict[str, str] = {
+    "/lfd/authority": "lfdfuse.Authority",
 }
 
 
@@ -486,7 +492,117 @@ def decode_fused(data: bytes) -> FusedVector:
     return FusedVector.decode(data)
 
 
+# --- /lfd/network (execute, teleop --table) --------------------------------------------------
+
+#: why the network asks for help: the BAC has no row in the active step, or its row's weights
+#: are not identifiable from the demonstration (the prior decides them)
+HELP_REASONS = ("unseen BAC", "not identifiable")
+NETWORK_EVENTS = ("help",)
+
+
+@dataclass(frozen=True)
+class NetworkEvent(_Codec):
+    """``lfdfuse.NetworkEvent``: something the network says about itself at one tick; for now only
+    ``help``: it entered a BAC of ``step`` that its table cannot drive with confidence (``why``).
+
+    Written once when the condition begins (not every tick while it lasts), so a log reader sees
+    each request for help once. A channel of its own, not a field of ``/lfd/step``: that schema
+    forbids extra fields, so old readers keep reading new logs.
+    """
+
+    TOPIC: ClassVar[str] = "/lfd/network"
+    SCHEMA: ClassVar[str] = "lfdfuse.NetworkEvent"
+    KEYS: ClassVar[frozenset[str]] = frozenset({"timestamp", "event", "step", "bac", "why"})
+
+    t_ns: int
+    event: str
+    step: str
+    bac: int
+    why: str
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "timestamp": stamp(self.t_ns),
+            "event": self.event,
+            "step": self.step,
+            "bac": self.bac,
+            "why": self.why,
+        }
+
+    @classmethod
+    def _from_json(cls, msg: dict[str, Any]) -> NetworkEvent:
+        _fields(msg, cls.KEYS)
+        return cls(
+            _t_ns(msg),
+            _choice(msg["event"], NETWORK_EVENTS, "event"),
+            _name(msg["step"], "step"),
+            _count(msg["bac"], "bac"),
+            _choice(msg["why"], HELP_REASONS, "why"),
+        )
+
+
+def encode_help(t_ns: int, *, step: str, bac: int, why: str) -> bytes:
+    return NetworkEvent(t_ns, "help", step, bac, why).encode()
+
+
+def decode_network_event(data: bytes) -> NetworkEvent:
+    return NetworkEvent.decode(data)
+
+
+# --- /lfd/authority (teleop --table, drive) ---------------------------------------------------
+
+AUTHORITIES = ("network", "person")
+
+
+@dataclass(frozen=True)
+class Authority(_Codec):
+    """``lfdfuse.Authority``: who drove this tick — ``network`` (a fusion table) or ``person`` —
+    and through what (``keyboard``, ``script``, ``foxglove client 3``; empty when unknown).
+
+    One message per tick of a run where both can drive; ``segment`` reads it to tell the
+    learner's own ticks from the teacher's.
+    """
+
+    TOPIC: ClassVar[str] = "/lfd/authority"
+    SCHEMA: ClassVar[str] = "lfdfuse.Authority"
+    KEYS: ClassVar[frozenset[str]] = frozenset({"timestamp", "authority", "source"})
+
+    t_ns: int
+    authority: str
+    source: str = ""
+
+    @property
+    def person(self) -> bool:
+        """Whether a person drove this tick."""
+        return self.authority == "person"
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"timestamp": stamp(self.t_ns), "authority": self.authority, "source": self.source}
+
+    @classmethod
+    def _from_json(cls, msg: dict[str, Any]) -> Authority:
+        _fields(msg, cls.KEYS)
+        return cls(
+            _t_ns(msg), _choice(msg["authority"], AUTHORITIES, "authority"), _name(msg["source"], "source")
+        )
+
+
+def encode_authority(t_ns: int, authority: str, source: str = "") -> bytes:
+    return Authority(t_ns, authority, source).encode()
+
+
+def decode_authority(data: bytes) -> Authority:
+    return Authority.decode(data)
+
+
+def _choice(v: object, allowed: tuple[str, ...], what: str) -> str:
+    if type(v) is not str or v not in allowed:
+        raise MessageError(f"{what} is not one of {', '.join(allowed)}")
+    return v
+
+
 #: every ``/lfd/*`` message class, by topic
 CODECS: dict[str, type[_Codec]] = {
-    c.TOPIC: c for c in (BehaviorRow, DemoHeading, Bac, SegmentMark, NetworkStep, FusedVector)
+    c.TOPIC: c
+    for c in (BehaviorRow, DemoHeading, Bac, SegmentMark, NetworkStep, FusedVector, NetworkEvent, Authority)
 }

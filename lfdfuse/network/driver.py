@@ -3,14 +3,16 @@
 :class:`NetworkDriver` senses through the same behaviour code as ``segment`` (one scan at a
 time), asks the :class:`~lfdfuse.network.runtime.NetworkRuntime` for the fused vector and turns
 it into a command with the one vector ↔ command mapping, below a safety reflex. It keeps what
-it decided (``last``) so a recorder can log why the robot turned.
+it decided (``last``) so a recorder can log why the robot turned, and asks for help
+(:class:`HelpRequest`) when it enters a BAC its table cannot drive with confidence.
 """
 
 from __future__ import annotations
 
 import math
 from collections import defaultdict
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, Literal
 
 import numpy as np
 
@@ -27,6 +29,36 @@ from lfdfuse.sim.robot import RobotParams
 from lfdfuse.sim.sensors import ScanGeometry, SensorParams, target_reached
 from lfdfuse.sim.simulator import Observation
 from lfdfuse.world.model import World
+
+HelpReason = Literal["unseen BAC", "not identifiable"]
+
+
+@dataclass(frozen=True)
+class HelpRequest:
+    """The network asks for help: at ``t_ns`` its active ``step`` met ``bac``, which the table has
+    no row for (``unseen BAC``: default weights drive) or whose row the demonstration could not pin
+    down (``not identifiable``: the prior decides)."""
+
+    t_ns: int
+    step: str
+    bac: int
+    why: HelpReason
+
+    @property
+    def t_s(self) -> float:
+        return self.t_ns / 1e9
+
+
+def help_reason(decision: Decision) -> HelpReason | None:
+    """Why this decision needs help, or None when its row is a learned, identifiable one."""
+    if decision.step is None:
+        return None
+    if decision.unseen:
+        return "unseen BAC"
+    row = decision.step.row(decision.bac)
+    if row is not None and row.identifiable is False:
+        return "not identifiable"
+    return None
 
 
 def weighted_targets(table: FusionTable) -> list[str]:
@@ -103,6 +135,11 @@ class NetworkDriver:
         self._ir = side_beam_index(self.geometry.angles, -math.pi / 2)
         self.openings = OpeningSensor(self.geometry)  # landmark cues for sub-goal steps (issue 15)
         self._odom: tuple[float, float, float] | None = None
+        #: every request for help, in order (one when a condition begins, not every tick it lasts)
+        self.help: list[HelpRequest] = []
+        #: the request raised at the last tick (None: no new one), and the one standing now
+        self.help_now: HelpRequest | None = None
+        self.asking: HelpRequest | None = None
 
     @property
     def done(self) -> bool:
@@ -123,6 +160,19 @@ class NetworkDriver:
         left, right = self.openings.update(observation.reading.ranges_m, step_m, turn)
         return Cues(left, right, step_m, turn, self.openings.held_turn_rad)
 
+    def _ask(self, dec: Decision, t_ns: int) -> None:
+        """Raise a :class:`HelpRequest` when a condition that needs help begins."""
+        why = help_reason(dec)
+        self.help_now = None
+        if why is None:
+            self.asking = None
+            return
+        step = step_name_of(dec.path, self.table)
+        a = self.asking
+        if a is None or (a.step, a.bac, a.why) != (step, dec.bac, why):
+            self.asking = self.help_now = HelpRequest(t_ns, step, dec.bac, why)
+            self.help.append(self.asking)
+
     def command(self, observation: Observation) -> tuple[float, float]:
         reading = observation.reading
         obs = Observations.from_detections(
@@ -141,6 +191,7 @@ class NetworkDriver:
             self.reached.append((goal, self.ticks))
         self.last, self.last_outputs = dec, outputs
         self.ticks += 1
+        self._ask(dec, observation.t_ns)
         if dec.step is None:
             return 0.0, 0.0
         self.unseen_ticks += dec.unseen

@@ -38,6 +38,10 @@ class FusionRow:
     low_samples: bool = False
     trial_std: dict[str, float] | None = None
     identifiable: bool | None = None
+    #: pooled demos (issue 21): the samples the demos after the first added to this row, and the
+    #: weights the first demo alone gave it (None: no demo changed the row, or it is new)
+    samples_added: int | None = None
+    weights_before: dict[str, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -155,7 +159,18 @@ def _weights(
 def _row(d: Any, behaviors: tuple[str, ...], where: str) -> FusionRow:
     d = _keys(
         d,
-        {"bac", "weights", "std", "trial_std", "samples", "identifiable", "fit_error_deg", "low_samples"},
+        {
+            "bac",
+            "weights",
+            "std",
+            "trial_std",
+            "samples",
+            "identifiable",
+            "fit_error_deg",
+            "low_samples",
+            "samples_added",
+            "weights_before",
+        },
         where,
     )
     bac = _req(d, "bac", where)
@@ -183,16 +198,13 @@ def _row(d: Any, behaviors: tuple[str, ...], where: str) -> FusionRow:
     low = d.get("low_samples", False)
     if not isinstance(low, bool):
         raise ConfigError(f"fusion table: {where}.low_samples must be true or false")
-    return FusionRow(
-        bac,
-        weights,
-        std,
-        samples,
-        fit,
-        low,
-        tstd,
-        ident,
-    )
+    added = d.get("samples_added")
+    if added is not None:
+        added = integer(added, f"fusion table: {where}.samples_added", lo=0, hi=2**63 - 1)
+    before = d.get("weights_before")
+    if before is not None:
+        before = _weights(before, behaviors, f"{where}.weights_before", allow_zero_sum=True)
+    return FusionRow(bac, weights, std, samples, fit, low, tstd, ident, added, before)
 
 
 def _network(d: Any, behaviors: tuple[str, ...], where: str) -> Network:
@@ -279,6 +291,10 @@ def _row_dict(r: FusionRow) -> dict[str, Any]:
         d["fit_error_deg"] = round(r.fit_error_deg, 2)
     if r.low_samples:
         d["low_samples"] = True
+    if r.samples_added is not None:
+        d["samples_added"] = r.samples_added
+    if r.weights_before is not None:
+        d["weights_before"] = {k: _r(v) for k, v in r.weights_before.items()}
     return d
 
 

@@ -29,9 +29,19 @@ from lfdfuse.errors import LogError
 from lfdfuse.log import lfd
 from lfdfuse.log.reader import check_log_file, iter_attachments, iter_raw, meta_float, read_run
 from lfdfuse.log.writer import LogWriter
+from lfdfuse.segment.commands import detect_commands
 from lfdfuse.segment.demo import demonstrated, lag_ns_of, observations_of
 from lfdfuse.segment.goals import Segmentation, segment_outputs
-from lfdfuse.segment.lag import LagFit, lag_fits
+from lfdfuse.segment.lag import (
+    CANDIDATE_LAGS_S,
+    MIN_PRESSES,
+    LagFit,
+    best_fit,
+    best_lag,
+    lag_fits,
+    press_lag_fits,
+)
+from lfdfuse.segment.read import AUTHORITY_TOPIC, network_ticks
 from lfdfuse.sim.robot import RobotParams
 from lfdfuse.sources.importers import require_lfdfuse_log
 
@@ -55,8 +65,7 @@ class SegmentResult:
     def best_lag(self) -> LagFit | None:
         """The candidate lag whose fits explain the demo best (smallest heading error; the
         shorter lag on a tie), or None when no lag was measured or none had informative steps."""
-        fits = [f for f in self.lag_fits if f.steps > 0]
-        return min(fits, key=lambda f: f.heading_error_deg) if fits else None
+        return best_fit(self.lag_fits)
 
     @property
     def fit_at_lag(self) -> LagFit | None:
@@ -85,15 +94,25 @@ def segment_file(
     behaviors: str = DEFAULT_PRESET,
     params: BehaviorParams | None = None,
     drive: DriveParams | None = None,
-    lag_s: float = 0.0,
+    lag_s: float | None = 0.0,
     measure_lag: bool = True,
+    commands: str = "auto",
 ) -> SegmentResult:
     """Read a demo log, compute behaviours, segment, and write the segmented log to ``out``.
 
     The robot's limits for the command → heading mapping come from ``drive``, else from the
     log's provenance (``v_max_mps``, ``omega_max_rps``: an imported robot's own), else the
-    simulated robot's.
+    simulated robot's. ``lag_s`` None (``--lag auto``, the command line's default) pairs each scan with the command of the
+    best-explaining lag (:mod:`~lfdfuse.segment.lag`); ``commands`` (``auto``, ``continuous``,
+    ``discrete``) is the command model estimate will use (:mod:`~lfdfuse.segment.commands`). A lag outside the lags the search covers is refused: the summary could
+    not say whether it explains the demo.
     """
+    lo, hi = min(CANDIDATE_LAGS_S), max(CANDIDATE_LAGS_S)
+    if lag_s is not None and math.isfinite(lag_s) and not lo <= lag_s <= hi:
+        raise LogError(
+            f"--lag {lag_s:g} is outside the {lo:g}–{hi:g} s the lag search covers (teachers react"
+            " within a second): give a lag in that range"
+        )
     check_log_file(src)
     if Path(out).resolve() == Path(src).resolve():
         raise LogError(f"the output {out} would overwrite the input: give another -o")
@@ -110,8 +129,21 @@ def segment_file(
         params = BehaviorParams(reach_m=reach)
     outputs = compute_in_chunks(obs, names, params)
     segm = segment_outputs(outputs)
+    mode = detect_commands(run.cmd_v_mps, run.cmd_omega_rps, run.metadata, run.topics, commands)
+    fits = tuple(lag_fits(run, outputs, drive)) if measure_lag or lag_s is None else ()
+    if lag_s is None:
+        lag_s = best_lag(fits)
+        if mode == "discrete":  # a decision answers the scene one reaction before its press
+            presses = tuple(press_lag_fits(run, outputs, drive, lag_s))
+            if min((f.steps for f in presses), default=0) >= MIN_PRESSES:
+                fits, lag_s = presses, best_lag(presses)
     lag_ns = lag_ns_of(lag_s)
     vr, ok = demonstrated(run, drive, lag_ns=lag_ns)
+    # a correction log (teleop --table): the network's own ticks are the learner's, not the
+    # teacher's; the command paired with a scan is the one in force ``lag`` later, so is its driver
+    net = network_ticks(src, run.t_ns + np.int64(lag_ns))
+    if net is not None:
+        ok = ok & ~net
     meta = dict(run.metadata)
     meta.update(
         {
@@ -119,8 +151,11 @@ def segment_file(
             "segment_version": __version__,
             "d_max_m": repr(params.d_max_m),
             "segment_lag_s": repr(lag_s),
+            "segment_commands": mode,
         }
     )
+    if net is not None:
+        meta["segment_network_ticks"] = str(int(net.sum()))
     with LogWriter(out, metadata=meta, topics=dict(lfd.SEGMENT_TOPICS)) as log:
         for name, media, data in iter_attachments(src):
             log.attach(name, media, data)
@@ -128,7 +163,9 @@ def segment_file(
         lfd_msgs = _lfd_messages(run.t_ns, outputs, segm, vr, ok)
         pending = next(lfd_msgs, None)
         # copy every input channel (but our own, which we replace) interleaved in time order
-        for raw in iter_raw(src, exclude_prefix="/lfd/"):
+        for raw in iter_raw(src):
+            if raw.topic.startswith("/lfd/") and raw.topic != AUTHORITY_TOPIC:
+                continue  # ours, replaced (who drove is the input's: it stays)
             while pending is not None and pending[1] < raw.log_time_ns:
                 log.write_raw(*pending)
                 pending = next(lfd_msgs, None)
@@ -136,7 +173,6 @@ def segment_file(
         while pending is not None:
             log.write_raw(*pending)
             pending = next(lfd_msgs, None)
-    fits = tuple(lag_fits(run, outputs, drive)) if measure_lag else ()
     return SegmentResult(tuple(names), segm, run.t_ns, ok, str(out), lag_s, fits)
 
 

@@ -11,9 +11,10 @@ from lfdfuse.behaviors.primitives import ATTRACT, BASE_BEHAVIORS
 from lfdfuse.errors import LogError
 from lfdfuse.log import lfd
 from lfdfuse.log.messages import PROVENANCE
-from lfdfuse.log.reader import file_info, iter_messages
+from lfdfuse.log.reader import file_info, hold, iter_messages
 from lfdfuse.segment.demo import TARGET_NAME
 from lfdfuse.segment.goals import GoalSegment, Segmentation
+from lfdfuse.sources.importers import require_lfdfuse_log
 
 #: most behaviours of a segmented log (a BAC is an int64 bit mask)
 MAX_BEHAVIORS = 62
@@ -92,6 +93,7 @@ def read_segmented(path: str | Path) -> SegmentedRun:
     """
     info = file_info(path)
     if "/lfd/behaviors" not in info.channels:
+        require_lfdfuse_log(path)  # a robot log: the first missing step is import, not segment
         raise LogError(f"{path} is not segmented (no /lfd/behaviors): run `lfdfuse segment {path}` first")
     capacity = info.channels["/lfd/behaviors"][2]
     cols: _Columns | None = None
@@ -165,6 +167,32 @@ def read_segmented(path: str | Path) -> SegmentedRun:
         segments=tuple(segs),
         metadata=info.metadata.get(PROVENANCE, {}),
     )
+
+
+#: who drove each tick of a ``teleop --table`` log (DESIGN §5): ``network`` or ``person``
+AUTHORITY_TOPIC = lfd.Authority.TOPIC
+
+
+def network_ticks(path: str | Path, when_ns: np.ndarray) -> np.ndarray | None:
+    """Per time of ``when_ns (N,)`` whether the learned network drove then (``/lfd/authority``
+    held: the latest message at or before it, the first before the first), or None when the log
+    has no such channel (a plain demo: the teacher drove throughout)."""
+    if AUTHORITY_TOPIC not in file_info(path).channels:
+        return None
+    t: list[int] = []
+    net: list[bool] = []
+    at = 0
+    try:
+        for _topic, _s, at, data in iter_messages(path, topics=[AUTHORITY_TOPIC]):
+            t.append(at)
+            net.append(not lfd.decode_authority(data).person)
+    except lfd.MessageError as exc:
+        raise LogError(f"{path}: a {AUTHORITY_TOPIC} message at t={at} ns: {exc}") from exc
+    if not t:
+        return None
+    order = np.argsort(np.array(t, dtype=np.int64), kind="stable")
+    ts, flags = np.array(t, dtype=np.int64)[order], np.array(net, dtype=bool)[order]
+    return np.asarray(flags[hold(ts, when_ns)])
 
 
 def segmentation_of(seg: SegmentedRun) -> Segmentation:

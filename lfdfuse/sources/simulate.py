@@ -14,6 +14,7 @@ from lfdfuse.sim.loop import Progress, RunSummary, run
 from lfdfuse.sim.robot import Pose, RobotParams
 from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.sim.simulator import Simulator
+from lfdfuse.sources.keyboard import KeyboardParams, KeyboardPerson, PressRecorder
 from lfdfuse.sources.planner import Planner
 from lfdfuse.sources.tasks import Leg
 from lfdfuse.sources.teachers import StyleTeacher, TeacherParams
@@ -31,12 +32,17 @@ class SimulateOptions:
     sensor_noise_m: float = 0.0
     teacher: TeacherParams = field(default_factory=TeacherParams)
     robot: RobotParams = field(default_factory=RobotParams)
+    keys_period_s: float | None = None  # --keys: the teacher as a person at a keyboard (§9)
 
 
 def simulate(opts: SimulateOptions, *, out: str | Path, progress: Progress | None = None) -> RunSummary:
     """Run a scripted teacher in a world and record the demonstration to ``out``."""
     if opts.duration_s <= 0:
         raise ConfigError("duration must be positive")
+    if opts.keys_period_s is not None and not (0.05 <= opts.keys_period_s <= 60.0):
+        raise ConfigError(
+            f"--keys must be a key period between 0.05 and 60 seconds, got {opts.keys_period_s}"
+        )
     rng = np.random.default_rng(opts.seed)
     params = SensorParams().with_noise(opts.sensor_noise_m) if opts.sensor_noise_m > 0 else SensorParams()
     start = opts.start or Pose(*opts.world.start)
@@ -52,24 +58,39 @@ def simulate(opts: SimulateOptions, *, out: str | Path, progress: Progress | Non
         rng=rng,
         params=opts.teacher,
     )
+    source: StyleTeacher | KeyboardPerson = teacher
+    extra: dict[str, str] = {}
+    if opts.keys_period_s is not None:
+        source = KeyboardPerson(
+            teacher,
+            drive=opts.robot.drive,
+            dt_s=opts.robot.dt_s,
+            rng=np.random.default_rng([opts.seed, 19]),  # its own stream: the teacher's is unchanged
+            params=KeyboardParams(period_s=opts.keys_period_s),
+        )
+        extra = {"input": f"keys:{opts.keys_period_s!r}"}
     meta = provenance(
         command="simulate",
         seed=opts.seed,
         world=opts.world,
         sensors=params,
-        teacher=opts.teacher_name,
+        teacher=opts.teacher_name if opts.keys_period_s is None else f"keyboard:{opts.teacher_name}",
         duration_s=repr(opts.duration_s),
         start=",".join(repr(v) for v in start.as_tuple()),
         task=";".join(f"{leg.target or '-'}:{leg.style}" for leg in opts.legs),
     )
+    meta.update(extra)
     sim = Simulator(opts.world, rng, params, opts.robot)
     with LogWriter(out, metadata=meta) as log:
+        sinks: list[Recorder | PressRecorder] = [Recorder(log, world=opts.world, sensors=params)]
+        if isinstance(source, KeyboardPerson):
+            sinks.append(PressRecorder(log, source))
         return run(
             sim,
-            teacher,
+            source,
             start=start,
             duration_s=opts.duration_s,
-            sinks=[Recorder(log, world=opts.world, sensors=params)],
+            sinks=sinks,
             progress=progress,
             out=str(out),
         )

@@ -1,4 +1,5 @@
-"""``make bench``: every benchmark suite, a table per suite, and one JSON file.
+"""``make bench``: every benchmark suite, a summary per suite that fits the terminal, and one
+JSON file with every column.
 
 Suites: ``pipeline`` (each stage's speed beside a baseline measured in the same run),
 ``world`` (raycasting on large maps, simulation on real building maps) and ``estimate``
@@ -15,7 +16,7 @@ import json
 import math
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import typer
 from rich.console import Console
@@ -28,6 +29,8 @@ SUITES = {
     "offroute": "lfdfuse.tools.bench_offroute",
     "memory": "lfdfuse.tools.bench_memory",
     "drive": "lfdfuse.tools.bench_drive",
+    "keys": "lfdfuse.tools.bench_keys",
+    "parallel": "lfdfuse.tools.bench_parallel",
 }
 
 app = typer.Typer(add_completion=False, pretty_exceptions_enable=False)
@@ -44,15 +47,30 @@ def _cell(value: Any) -> str:
 
 
 def render(console: Console, title: str, rows: list[dict[str, Any]]) -> None:
+    """A suite's rows as a summary that fits the console: ``name`` and then as many columns, in
+    order, as fit whole (no cell is cut); the rest are named below it and kept in the JSON."""
     columns: list[str] = []
     for row in rows:
         columns += [k for k in row if k not in columns]
-    table = Table(title=title, title_justify="left", box=None, header_style="bold")
+    cells = {c: [_cell(row.get(c)) for row in rows] for c in columns}
+    need = {c: max([len(c), *(len(v) for v in cells[c])]) + 2 for c in columns}  # + padding
+    first = [c for c in columns if c == "name"] or columns[:1]
+    shown, room = list(first), console.width - sum(need[c] for c in first)
     for c in columns:
-        table.add_column(c, justify="left" if c in ("name", "unit", "baseline") else "right")
-    for row in rows:
-        table.add_row(*(_cell(row.get(c)) for c in columns))
+        if c not in shown and need[c] <= room:
+            shown.append(c)
+            room -= need[c]
+    shown = [c for c in columns if c in shown]
+    table = Table(title=title, title_justify="left", box=None, header_style="bold", padding=(0, 1))
+    for c in shown:
+        justify: Literal["left", "right"] = "left" if c in ("name", "unit", "baseline") else "right"
+        table.add_column(c, justify=justify, no_wrap=True, overflow="ignore")
+    for i in range(len(rows)):
+        table.add_row(*(cells[c][i] for c in shown))
     console.print(table)
+    hidden = [c for c in columns if c not in shown]
+    if hidden:
+        console.print(f"  (+{len(hidden)} more in the JSON: {', '.join(hidden)})", soft_wrap=False)
 
 
 @app.command()
@@ -63,7 +81,10 @@ def main(
     quick: bool = typer.Option(False, "--quick", help="Shorter runs (a smoke test of the benchmarks)."),
 ) -> None:
     """Run the benchmarks, print a table per suite and write JSON."""
-    console = Console(highlight=False, width=200)  # wide tables; piped to a file they stay whole
+    # a summary that fits the terminal (100 columns when piped); every column is in the JSON
+    console = Console(highlight=False)
+    if not console.is_terminal:
+        console.width = 100
     results: dict[str, list[dict[str, Any]]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         for name in suite:

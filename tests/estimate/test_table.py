@@ -197,10 +197,9 @@ def test_estimate_cli(segmented: Path, tmp_path: Path, sample_dir: Path) -> None
         os.chdir(old)
 
 
-def test_all_stationary_gives_no_rows_but_a_valid_table(segmented: Path) -> None:
+def test_all_stationary_is_nothing_to_learn(segmented: Path) -> None:
+    """A demo without one informative step is an error, not a table of default weights."""
     run = read_segmented(segmented)
     still = type(run)(**{**run.__dict__, "informative": np.zeros_like(run.informative)})
-    table, groups, skipped = estimate_run(still, opts=EstimateOptions())
-    assert groups == skipped > 0
-    assert all(not s.fusion for s in table.network.steps)
-    assert parse_table(yaml.safe_load(dump_table(table))) == table
+    with pytest.raises(ConfigError, match="nothing to learn"):
+        estimate_run(still, opts=EstimateOptions())

@@ -101,3 +101,32 @@ def test_the_report_file_round_trips_and_the_verdict_counts_goals(tmp_path: Path
     assert verdict(rep) == (
         "task NOT completed (2/3 goals), step reach-red keeps the wall on its left, 2 collisions"
     )
+
+
+def test_help_requests_extend_the_report_and_read_as_one_line() -> None:
+    from lfdfuse.execute.report import help_line
+    from lfdfuse.network.driver import HelpRequest
+
+    asks = [HelpRequest(k * 1_300_000_000, "reach-red", 5 + k, "unseen BAC") for k in range(5)]
+    rep = build_report(_summary([]), goals=[], side={}, unseen_ticks=0, reflex_ticks=0, help=asks)
+    assert rep["help"][1] == {"t_s": 1.3, "step": "reach-red", "bac": 6, "why": "unseen BAC"}
+    assert json.loads(json.dumps(rep)) == rep
+    line = help_line(rep)
+    assert line is not None and line.startswith(
+        "asked for help 5 times: step reach-red at 0.0 s (BAC 5: unseen BAC)"
+    )
+    assert line.endswith("and 2 more")
+    quiet = build_report(_summary([]), goals=[], side={}, unseen_ticks=0, reflex_ticks=0)
+    assert quiet["help"] == [] and help_line(quiet) is None
+    assert help_line({k: v for k, v in quiet.items() if k != "help"}) is None  # a report from before
+
+
+def test_the_verdict_names_each_style_once() -> None:
+    steps = [
+        {"name": n, "style": s} for n, s in [("a", "left"), ("b", "unknown"), ("c", "unknown"), ("d", "left")]
+    ]
+    rep = {"goals": [], "completed": None, "steps": steps, "collisions": 0}
+    assert verdict(rep) == (
+        "step a keeps the wall on its left; steps b, c have no measured style; step d keeps the wall on its left,"
+        " 0 collisions"
+    )

@@ -89,6 +89,15 @@ MESSAGES = {
             lambda w: {k: round(v, 4) for k, v in w.items()}
         ),
     ),
+    lfd.NetworkEvent: st.builds(
+        lfd.NetworkEvent,
+        T_NS,
+        st.sampled_from(lfd.NETWORK_EVENTS),
+        NAME,
+        st.integers(0, 2**62),
+        st.sampled_from(lfd.HELP_REASONS),
+    ),
+    lfd.Authority: st.builds(lfd.Authority, T_NS, st.sampled_from(lfd.AUTHORITIES), st.text(max_size=20)),
 }
 
 
@@ -116,12 +125,13 @@ def test_the_module_encoders_write_what_the_classes_write() -> None:
     assert lfd.NetworkStep.decode(step) == lfd.NetworkStep(t, "go/red", None, 3, True, ("red",))
     fused = lfd.decode_fused(lfd.encode_fused(t, 0.1, 0.2, {"avoid": 0.123456, "wander": 0.876544}))
     assert fused.weights == {"avoid": 0.1235, "wander": 0.8765}  # 1e-4 on the wire
-    assert set(lfd.SEGMENT_TOPICS) | set(lfd.EXECUTE_TOPICS) == set(lfd.CODECS) | {"/lfd/overlay"}
-    assert all(
-        lfd.CODECS[tp].SCHEMA == s
-        for tp, s in {**lfd.SEGMENT_TOPICS, **lfd.EXECUTE_TOPICS}.items()
-        if tp in lfd.CODECS
-    )
+    help_ = lfd.decode_network_event(lfd.encode_help(t, step="go/red", bac=5, why="unseen BAC"))
+    assert help_ == lfd.NetworkEvent(t, "help", "go/red", 5, "unseen BAC")
+    assert lfd.decode_authority(lfd.encode_authority(t, "person", "keyboard")).person
+    assert not lfd.decode_authority(lfd.encode_authority(t, "network")).person
+    topics = {**lfd.SEGMENT_TOPICS, **lfd.EXECUTE_TOPICS, **lfd.CORRECTION_TOPICS}
+    assert set(topics) == set(lfd.CODECS) | {"/lfd/overlay"}
+    assert all(lfd.CODECS[tp].SCHEMA == s for tp, s in topics.items() if tp in lfd.CODECS)
 
 
 # --- the decoders refuse exactly what the schemas refuse ----------------------------------------
@@ -176,6 +186,8 @@ SAMPLES = [
     lfd.SegmentMark(7, 1, "attract_red", "red"),
     lfd.NetworkStep(7, "go", None, 3, False, ("red", "green")),
     lfd.FusedVector(7, 0.5, 0.5, {"avoid": 0.25, "wander": 0.75}),
+    lfd.NetworkEvent(7, "help", "reach-red", 5, "not identifiable"),
+    lfd.Authority(7, "person", "foxglove client 3"),
 ]
 
 
@@ -330,7 +342,7 @@ def test_arrow_scenes_match_their_schema_and_point_along_their_vectors(
 @FAST
 @given(
     T_NS,
-    st.sampled_from(["key", "message", "end"]),
+    st.sampled_from(["key", "message", "end", "handback"]),
     st.text(max_size=30),
     st.text(max_size=20),
     st.text(max_size=20),

@@ -348,3 +348,24 @@ def test_installed_command_end_to_end(tmp_path: Path) -> None:
     foreign = subprocess.run([exe, "segment", str(TURTLEBOT)], cwd=tmp_path, capture_output=True, text=True)
     if foreign.returncode == 1 and "lfdfuse import" in foreign.stderr:  # once segment checks its input
         assert foreign.stderr.count("\n") == 1
+
+
+def test_robot_limits_ignore_a_wild_command_and_say_so() -> None:
+    """Issue 19: one wild command once gave a Neato a v_max of 19.9 m/s."""
+    import numpy as np
+
+    from lfdfuse.sources.importers.convert import ImportOptions, _limits
+
+    rng = np.random.default_rng(0)
+    v = np.concatenate([np.full(40, 0.3), np.zeros(20), [19.9]])
+    w = rng.choice([0.0, 0.3, -0.3], len(v))
+    odom = (np.abs(rng.normal(0.25, 0.03, 200)), rng.normal(0.0, 0.2, 200))
+    notes: list[str] = []
+    v_max, w_max, _ = _limits(ImportOptions(), None, None, v, w, False, odom=odom, notes=notes)
+    assert v_max == 0.3 and w_max == 0.3
+    assert len(notes) == 1 and notes[0].startswith("warning: implausible command speed up to 19.9 m/s")
+    # continuous commands (a scripted or planner log): a high percentile, not the maximum
+    notes.clear()
+    v = np.concatenate([rng.uniform(0.0, 0.5, 500), [7.0]])
+    v_max, _, _ = _limits(ImportOptions(), None, None, v, rng.uniform(-1, 1, len(v)), False, notes=notes)
+    assert v_max is not None and 0.45 < v_max <= 0.5 and notes and "7" in notes[0]

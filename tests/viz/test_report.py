@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 from matplotlib.image import imread
@@ -79,3 +80,27 @@ def test_report_into_a_file_is_a_user_error(tmp_path: Path) -> None:
     target.write_text("x")
     res = CliRunner().invoke(app, ["report", "-o", str(target), "--quick"])
     assert res.exit_code == 1 and res.output.startswith("error:")
+
+
+def test_the_report_on_two_workers_is_byte_identical(
+    report: Report, tmp_path: Path, dask_cluster: Any
+) -> None:
+    """The same grid on a 2-worker Dask LocalCluster (the cells in any order): the same report.json."""
+    out, _events, _result = report
+    other = tmp_path / "report"
+    events = list(
+        run_experiments(PaperOptions(logs=other / "logs", seed=1, quick=True), executor=dask_cluster)
+    )
+    results = events[-1].results
+    assert results is not None
+    write_report(results, tuple(rows(results)), out=other)
+    assert (other / "report.json").read_bytes() == (out / "report.json").read_bytes()
+
+
+def test_the_report_json_shows_the_spread_of_every_rate(report: Report) -> None:
+    out, _events, _result = report
+    data = json.loads((out / "report.json").read_text())
+    for name, s in data["spread"].items():
+        assert s["runs"] == len(data["runs"][name]) and 0 <= s["successes"] <= s["runs"], name
+        lo, hi = s["ci95"]
+        assert 0.0 <= lo <= s["rate"] <= hi <= 1.0, name

@@ -17,6 +17,7 @@ import numpy as np
 
 from lfdfuse.evaluate.paper.experiments import step_of_ticks
 from lfdfuse.evaluate.paper.records import Learned, PaperResults, Run, passing_sides, task_order
+from lfdfuse.execute.starts import wilson_interval
 from lfdfuse.network.table import FusionTable, table_steps
 from lfdfuse.segment.read import read_segmented
 from lfdfuse.world.model import load_world
@@ -146,6 +147,42 @@ def weight_stats(table: FusionTable) -> dict[str, Any]:
     }
 
 
+def passed(runs: Sequence[Run], want: str) -> int:
+    """Runs that passed every obstacle (at least 3) on side ``want`` without a collision."""
+    centres = [(o.circle[0], o.circle[1]) for o in load_world("obstacles").obstacles if o.circle]
+    good = 0
+    for r in runs:
+        sides = passing_sides(r.pose, centres)
+        good += len(sides) >= 3 and set(sides) == {want} and r.report["collisions"] == 0
+    return good
+
+
+def _rate(k: int, n: int) -> str:
+    """``k/n``, and with more than one run the Wilson 95 % interval of the rate: the grid's spread."""
+    if n <= 1:
+        return f"{k}/{n}"
+    lo, hi = wilson_interval(k, n)
+    return f"{k}/{n} (95 % interval {100 * lo:.0f}–{100 * hi:.0f} %)"
+
+
+def spread(results: PaperResults) -> dict[str, dict[str, Any]]:
+    """The rates over the grid's repeated runs, each with its Wilson 95 % interval (``report.json``)."""
+    runs = results.runs
+    counts = {
+        "task": (sum(task_ok(r) for r in runs["task"]), len(runs["task"])),
+        **{s: (passed(runs[s], s.split("-")[1]), len(runs[s])) for s in ("pass-left", "pass-right")},
+        **{
+            f"{s}/building": (_count(runs[f"{s}/building"], w), len(runs[f"{s}/building"]))
+            for s, w in SIDE.items()
+        },
+    }
+    out = {}
+    for name, (k, n) in counts.items():
+        lo, hi = wilson_interval(k, n)
+        out[name] = {"successes": k, "runs": n, "rate": k / n if n else None, "ci95": [lo, hi]}
+    return out
+
+
 def rows(results: PaperResults) -> Iterator[Row]:
     """The comparison rows, in the paper's order."""
     learned, runs, junctions = results.learned, results.runs, results.junctions
@@ -186,7 +223,7 @@ def rows(results: PaperResults) -> Iterator[Row]:
         rs = runs[f"{style}/building"]
         n = _count(rs, want)
         ok &= n == len(rs)
-        parts.append(f"{style}: {n}/{len(rs)} keep {want}")
+        parts.append(f"{style}: {_rate(n, len(rs))} keep {want}")
     yield Row(
         "styles learned in the small world, run in the large one",
         "Sec. V-A Scenario 2; Fig. 9",
@@ -250,7 +287,7 @@ def rows(results: PaperResults) -> Iterator[Row]:
         "three-goal task from several starts",
         "Sec. V-B.1 (Physical Scenario 1)",
         "5 of 6 runs complete (the paper writes 85 %); the failure was a goal the camera missed",
-        f"{done} of {len(task)} complete red → green → blue without collision",
+        f"{_rate(done, len(task))} complete red → green → blue without collision",
         done / len(task) >= 5 / 6,
         "Ours is simulated: no lighting changes, perfect target detection within camera reach.",
     )
@@ -283,19 +320,19 @@ def rows(results: PaperResults) -> Iterator[Row]:
         ws["largest_trial_std_rows_100_samples"] < 0.05,
         "Our sampler's spread over trials is small by design; the posterior std (fig12-14-posterior) says how much "
         "the data leaves open, which the paper's trial spread does not measure."
-        + (" Quick mode: 3 trials only." if quick else ""),
+        + (
+            f" Quick mode: {learned['trials'].table.estimated_by.get('trials', '?')} trials only."
+            if quick
+            else ""
+        ),
     )
     parts, ok = [], True
     for style in ("pass-left", "pass-right"):
         want = style.split("-")[1]
-        centres = [(o.circle[0], o.circle[1]) for o in load_world("obstacles").obstacles if o.circle]
         rs = runs[style]
-        good_runs = 0
-        for r in rs:
-            sides = passing_sides(r.pose, centres)
-            good_runs += len(sides) >= 3 and set(sides) == {want} and r.report["collisions"] == 0
+        good_runs = passed(rs, want)
         ok &= good_runs == len(rs)
-        parts.append(f"{style}: {good_runs}/{len(rs)} runs pass every obstacle on the {want}")
+        parts.append(f"{style}: {_rate(good_runs, len(rs))} runs pass every obstacle on the {want}")
     yield Row(
         "obstacle passing",
         "Sec. V-B Physical Scenario 2; Fig. 15",
@@ -345,6 +382,7 @@ def numbers(
             "runs": {k: [r.summary() for r in v] for k, v in results.runs.items()},
             "junctions": {k: dict(v) for k, v in results.junctions.items()},
             "weights": weight_stats(results.learned["trials"].table),
+            "spread": spread(results),
             "figures": list(figures),
         }
     )

@@ -7,7 +7,6 @@ Everything is seeded: the same seed gives the same numbers.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -88,11 +87,11 @@ def demonstrate_and_learn(
     )
 
 
-def relearn(lesson: Learned, *, estimate: EstimateOptions, out: Path) -> Learned:
-    """The same demonstration learned with ``estimate``, its table written to ``out``."""
-    table = learn.learn([lesson.segmented], options=learn.LearnOptions(estimate)).table
+def relearn_table(segmented: Path, *, estimate: EstimateOptions, out: Path) -> FusionTable:
+    """A segmented demonstration learned with ``estimate``, the table written to ``out``."""
+    table = learn.learn([segmented], options=learn.LearnOptions(estimate)).table
     write_table(table, out)
-    return replace(lesson, table_path=out, table=table)
+    return table
 
 
 def execute(

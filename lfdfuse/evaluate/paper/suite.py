@@ -1,15 +1,19 @@
-"""The report's experiments in order: styles, junctions, the three-goal task, trials, obstacles.
+"""The report's experiments: styles, junctions, the three-goal task, trials, obstacles.
 
 :func:`run_experiments` is an iterator of :class:`ExperimentEvent` (the CLI turns them into a
 progress bar); its last event carries the :class:`~lfdfuse.evaluate.paper.records.PaperResults`.
-The logs and tables behind every number are written to the options' ``logs`` folder.
+The experiments are cells (:mod:`~lfdfuse.evaluate.paper.cells`) in two waves — every
+demonstration learned, then every run of a learned network and the trials — handed to an
+executor (:mod:`lfdfuse.parallel`: in this process by default, Dask when asked). The logs and
+tables behind every number are written to the options' ``logs`` folder.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -17,19 +21,28 @@ from lfdfuse.errors import LfdError
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.estimate.smc import SMCParams
 from lfdfuse.evaluate.paper import experiments as ex
+from lfdfuse.evaluate.paper.cells import LearnCell, RelearnCell, RunCell, call
 from lfdfuse.evaluate.paper.compare import style_errors
 from lfdfuse.evaluate.paper.records import STYLES, Learned, PaperResults, Run, junction_choice
+from lfdfuse.parallel import Batch, Executor, InProcess
 from lfdfuse.sources.tasks import Leg
-from lfdfuse.world.model import load_world
+
+#: the most a grid is scaled (``--scale``)
+MAX_SCALE = 100
 
 
 @dataclass(frozen=True)
 class PaperOptions:
-    """``quick``: shorter demonstrations and runs, fewer starts and trials (a smoke test, ~30 s)."""
+    """``quick``: shorter demonstrations and runs, fewer starts and trials (a smoke test, ~30 s).
+
+    ``scale``: the stochastic cells' runs times ``scale`` — the three-goal task from ``6 × scale``
+    starts, obstacle passing ``3 × scale`` runs per controller — for rates with tighter intervals.
+    """
 
     logs: Path
     seed: int = 1
     quick: bool = False
+    scale: int = 1
 
     @property
     def trials(self) -> int:
@@ -42,7 +55,11 @@ class PaperOptions:
 
     @property
     def task_starts(self) -> int:
-        return 2 if self.quick else 6
+        return (2 if self.quick else 6) * self.scale
+
+    @property
+    def obstacle_runs(self) -> int:
+        return (1 if self.quick else 3) * self.scale
 
     @property
     def tour_s(self) -> float:
@@ -51,7 +68,7 @@ class PaperOptions:
 
 @dataclass(frozen=True)
 class ExperimentEvent:
-    """Progress: ``done`` of ``total`` experiments, what runs next; ``results`` on the last event."""
+    """Progress: ``done`` of ``total`` cells, the one that just finished; ``results`` on the last event."""
 
     done: int
     total: int
@@ -59,18 +76,142 @@ class ExperimentEvent:
     results: PaperResults | None = None
 
 
-class _Bench:
-    """The experiments' work in progress (private to :func:`run_experiments`)."""
+def _learn_cells(opts: PaperOptions) -> list[LearnCell]:
+    cells = [
+        LearnCell(
+            style,
+            opts.logs,
+            "tee",
+            (Leg(None, style),),
+            f"{style}-tee",
+            opts.tour_s,
+            opts.seed,
+            opts.estimate(),
+        )
+        for style in STYLES
+    ]
+    cells.append(
+        LearnCell(
+            "task", opts.logs, "building", ex.THREE_GOALS, "three-goals", 400.0, opts.seed, opts.estimate()
+        )
+    )
+    for style in ("pass-left", "pass-right"):
+        secs = 110.0 if opts.quick else 220.0
+        cells.append(
+            LearnCell(
+                style,
+                opts.logs,
+                "obstacles",
+                (Leg(None, style),),
+                f"{style}-obstacles",
+                secs,
+                opts.seed,
+                opts.estimate(),
+            )
+        )
+    return cells
 
-    def __init__(self, opts: PaperOptions) -> None:
-        self.opts = opts
-        self.learned: dict[str, Learned] = {}
-        self.runs: dict[str, list[Run]] = {}
-        self.junctions: dict[str, dict[str, str]] = {}
+
+def _run_cells(opts: PaperOptions, learned: dict[str, Learned]) -> list[RunCell]:
+    """Every run, in the order the runs are reported (the starts drawn here, from the seed)."""
+    logs, cells = opts.logs, []
+    starts = ex.BUILDING_STARTS[:1] if opts.quick else ex.BUILDING_STARTS
+    secs = 40.0 if opts.quick else 90.0
+    for style in STYLES:
+        table = learned[style].table_path
+        cells.append(RunCell(f"{style}/tee", logs, table, "tee", None, 2 * secs, f"{style}-run-tee", style))
+        cells += [
+            RunCell(
+                f"{style}/building",
+                logs,
+                table,
+                "building",
+                start,
+                secs,
+                f"{style}-run-building-{j}",
+                f"{style} from ({start[0]:g}, {start[1]:g})",
+            )
+            for j, start in enumerate(starts)
+        ]
+    for style in STYLES:
+        for which, start in (("T", ex.T_JUNCTION), ("rotated T", ex.ROTATED_T)):
+            tag = "t" if which == "T" else "rt"
+            cells.append(
+                RunCell(
+                    f"junction/{which}",
+                    logs,
+                    learned[style].table_path,
+                    "building",
+                    start,
+                    40.0,
+                    f"{style}-{tag}",
+                    style,
+                )
+            )
+    rng = np.random.default_rng(opts.seed)
+    for k in range(opts.task_starts):
+        # near the demonstration's start, but not the same (paper Section V-B.1)
+        start = (4.0 + rng.uniform(-1.0, 1.0), 1.2 + rng.uniform(-0.35, 0.35), rng.uniform(-0.35, 0.35))
+        start = (float(start[0]), float(start[1]), float(start[2]))
+        cells.append(
+            RunCell(
+                "task",
+                logs,
+                learned["task"].table_path,
+                "building",
+                start,
+                300.0,
+                f"three-goals-run-{k}",
+                f"run {k + 1}",
+                k,
+            )
+        )
+    rng = np.random.default_rng(opts.seed + 1000)
+    for style in ("pass-left", "pass-right"):
+        for k in range(opts.obstacle_runs):
+            start = (1.0, float(1.5 + rng.uniform(-0.3, 0.3)), float(rng.uniform(-0.2, 0.2)))
+            cells.append(
+                RunCell(
+                    style,
+                    logs,
+                    learned[style].table_path,
+                    "obstacles",
+                    start,
+                    90.0,
+                    f"{style}-run-{k}",
+                    f"{style} run {k + 1}",
+                    k,
+                )
+            )
+    return cells
 
 
-def run_experiments(opts: PaperOptions) -> Iterator[ExperimentEvent]:
-    """Run every experiment; yields progress, the last event with the results."""
+def _wave(
+    cells: Sequence[Any], executor: Executor, done: int, total: int
+) -> Iterator[tuple[int, list[Any] | None, str]]:
+    """Run a wave of cells; yields ``(done, None, label)`` per finished cell, then ``(done, values, "")``.
+
+    A failed cell fails the report (one line naming the cell)."""
+    batch: Batch[Any, Any, list[Any]] = Batch(
+        call,
+        cells,
+        executor=executor,
+        reduce=lambda outs: [o.value for o in outs],
+        labels=[c.title for c in cells],
+    )
+    for ev in batch:
+        if ev.error is not None:
+            raise LfdError(f"report: {ev.label}: {ev.error}")
+        if ev.index >= 0:
+            yield done + ev.finished, None, ev.label
+    yield done + len(cells), batch.result(), ""
+
+
+def run_experiments(opts: PaperOptions, *, executor: Executor | None = None) -> Iterator[ExperimentEvent]:
+    """Run every experiment on ``executor`` (default: in this process); yields progress, the last
+    event with the results."""
+    if not 1 <= opts.scale <= MAX_SCALE:
+        raise LfdError(f"--scale must be from 1 to {MAX_SCALE}, got {opts.scale}")
     for folder in (opts.logs, *opts.logs.parents):
         if folder.exists() and not folder.is_dir():
             raise LfdError(f"cannot write the experiments' logs into {folder}: it is a file")
@@ -78,163 +219,47 @@ def run_experiments(opts: PaperOptions) -> Iterator[ExperimentEvent]:
         opts.logs.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise LfdError(f"cannot create {opts.logs}: {exc.strerror}") from exc
-    b = _Bench(opts)
-    stages: list[tuple[str, Callable[[_Bench], None]]] = [
-        *((f"demonstrate {s} in tee", _learn_style(s)) for s in STYLES),
-        ("run the styles in tee and building", _run_styles),
-        ("T-junctions", _run_junctions),
-        ("demonstrate the three-goal task", _learn_task),
-        ("run the three-goal task", _run_task),
-        (f"{opts.trials} estimation trials", _trials),
-        ("obstacle passing", _obstacles),
-    ]
-    for i, (label, stage) in enumerate(stages):
-        yield ExperimentEvent(i, len(stages), label)
-        stage(b)
-    runs = {k: tuple(v) for k, v in b.runs.items()}
+    opts = replace(opts, logs=opts.logs.absolute())  # a worker's working folder may be another
+    ex_ = executor or InProcess()
+    first = _learn_cells(opts)
+    # the second wave's size is known before it starts: 3 styles × (1 + starts) + 6 junction runs …
+    n_runs = len(STYLES) * (1 + (1 if opts.quick else len(ex.BUILDING_STARTS)) + 2)
+    total = len(first) + n_runs + opts.task_starts + 2 * opts.obstacle_runs + 1
+    yield ExperimentEvent(0, total, "demonstrate and learn")
+    learned_list: list[Learned] = []
+    for done, values, label in _wave(first, ex_, 0, total):
+        if values is None:
+            yield ExperimentEvent(done, total, label)
+        else:
+            learned_list = values
+    learned = {c.key: v for c, v in zip(first, learned_list, strict=True)}
+    task = learned["task"]
+    trials_out = opts.logs / f"three-goals-{opts.trials}trials.yaml"
+    second: list[RunCell | RelearnCell] = [*_run_cells(opts, learned)]
+    second.append(RelearnCell("trials", task.segmented, opts.estimate(opts.trials), trials_out))
+    values2: list[Any] = []
+    for done, values, label in _wave(second, ex_, len(first), total):
+        if values is None:
+            yield ExperimentEvent(done, total, label)
+        else:
+            values2 = values
+    runs: dict[str, list[Run]] = {}
+    for cell, value in zip(second, values2, strict=True):
+        if isinstance(cell, RunCell):
+            runs.setdefault(cell.key, []).append(value)
+        else:
+            learned["trials"] = replace(task, table_path=cell.out, table=value)
+    junctions = {
+        style: {
+            which: junction_choice(runs[f"junction/{which}"][i].pose[-1], which)
+            for which in ("T", "rotated T")
+        }
+        for i, style in enumerate(STYLES)
+    }
+    order = [*STYLES, "task", "trials", "pass-left", "pass-right"]
+    learned = {k: learned[k] for k in order}
+    frozen = {k: tuple(v) for k, v in runs.items()}
     results = PaperResults(
-        opts.seed,
-        opts.quick,
-        opts.trials,
-        dict(b.learned),
-        runs,
-        {k: dict(v) for k, v in b.junctions.items()},
-        tuple(style_errors(b.learned, runs)),
+        opts.seed, opts.quick, opts.trials, learned, frozen, junctions, tuple(style_errors(learned, frozen))
     )
-    yield ExperimentEvent(len(stages), len(stages), "done", results)
-
-
-def _learn_style(style: str) -> Callable[[_Bench], None]:
-    def stage(b: _Bench) -> None:
-        b.learned[style] = ex.demonstrate_and_learn(
-            b.opts.logs,
-            world="tee",
-            legs=(Leg(None, style),),
-            name=f"{style}-tee",
-            seconds=b.opts.tour_s,
-            seed=b.opts.seed,
-            estimate=b.opts.estimate(),
-        )
-
-    return stage
-
-
-def _run_styles(b: _Bench) -> None:
-    tee, building = load_world("tee"), load_world("building")
-    starts = ex.BUILDING_STARTS[:1] if b.opts.quick else ex.BUILDING_STARTS
-    secs = 40.0 if b.opts.quick else 90.0
-    for style in STYLES:
-        table = b.learned[style].table
-        b.runs[f"{style}/tee"] = [
-            ex.execute(
-                b.opts.logs,
-                table,
-                world=tee,
-                start=None,
-                seconds=2 * secs,
-                name=f"{style}-run-tee",
-                label=style,
-            )
-        ]
-        b.runs[f"{style}/building"] = [
-            ex.execute(
-                b.opts.logs,
-                table,
-                world=building,
-                start=start,
-                seconds=secs,
-                name=f"{style}-run-building-{j}",
-                label=f"{style} from ({start[0]:g}, {start[1]:g})",
-            )
-            for j, start in enumerate(starts)
-        ]
-
-
-def _run_junctions(b: _Bench) -> None:
-    building = load_world("building")
-    for style in STYLES:
-        table = b.learned[style].table
-        choice = {}
-        for which, start in (("T", ex.T_JUNCTION), ("rotated T", ex.ROTATED_T)):
-            tag = "t" if which == "T" else "rt"
-            run = ex.execute(
-                b.opts.logs,
-                table,
-                world=building,
-                start=start,
-                seconds=40.0,
-                name=f"{style}-{tag}",
-                label=style,
-            )
-            b.runs.setdefault(f"junction/{which}", []).append(run)
-            choice[which] = junction_choice(run.pose[-1], which)
-        b.junctions[style] = choice
-
-
-def _learn_task(b: _Bench) -> None:
-    b.learned["task"] = ex.demonstrate_and_learn(
-        b.opts.logs,
-        world="building",
-        legs=ex.THREE_GOALS,
-        name="three-goals",
-        seconds=400.0,
-        seed=b.opts.seed,
-        estimate=b.opts.estimate(),
-    )
-
-
-def _run_task(b: _Bench) -> None:
-    building = load_world("building")
-    rng = np.random.default_rng(b.opts.seed)
-    runs = []
-    for k in range(b.opts.task_starts):
-        # near the demonstration's start, but not the same (paper Section V-B.1)
-        start = (4.0 + rng.uniform(-1.0, 1.0), 1.2 + rng.uniform(-0.35, 0.35), rng.uniform(-0.35, 0.35))
-        runs.append(
-            ex.execute(
-                b.opts.logs,
-                b.learned["task"].table,
-                world=building,
-                start=start,
-                seconds=300.0,
-                name=f"three-goals-run-{k}",
-                label=f"run {k + 1}",
-                seed=k,
-            )
-        )
-    b.runs["task"] = runs
-
-
-def _trials(b: _Bench) -> None:
-    path = b.opts.logs / f"three-goals-{b.opts.trials}trials.yaml"
-    b.learned["trials"] = ex.relearn(b.learned["task"], estimate=b.opts.estimate(b.opts.trials), out=path)
-
-
-def _obstacles(b: _Bench) -> None:
-    world = load_world("obstacles")
-    rng = np.random.default_rng(b.opts.seed + 1000)
-    n = 1 if b.opts.quick else 3
-    for style in ("pass-left", "pass-right"):
-        learned = ex.demonstrate_and_learn(
-            b.opts.logs,
-            world="obstacles",
-            legs=(Leg(None, style),),
-            name=f"{style}-obstacles",
-            seconds=110.0 if b.opts.quick else 220.0,
-            seed=b.opts.seed,
-            estimate=b.opts.estimate(),
-        )
-        b.learned[style] = learned
-        b.runs[style] = [
-            ex.execute(
-                b.opts.logs,
-                learned.table,
-                world=world,
-                start=(1.0, 1.5 + rng.uniform(-0.3, 0.3), rng.uniform(-0.2, 0.2)),
-                seconds=90.0,
-                name=f"{style}-run-{k}",
-                label=f"{style} run {k + 1}",
-                seed=k,
-            )
-            for k in range(n)
-        ]
+    yield ExperimentEvent(total, total, "done", results)

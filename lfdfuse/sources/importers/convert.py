@@ -161,7 +161,13 @@ def import_log(
     if len(cmd_t) == 0:
         notes.append("no /cmd_vel: the log has neither commands nor odometry, so it cannot be segmented")
 
-    v_max, w_max, limits_from = _limits(options, info.v_max_mps, info.omega_max_rps, cmd_v, cmd_w, want_odom)
+    odom_twist = None
+    if len(pose_t) > 1:
+        _t, ov, ow = commands_from_poses(pose_t, pose_arr[:, 0], pose_arr[:, 1], pose_arr[:, 2])
+        odom_twist = (ov, ow)
+    v_max, w_max, limits_from = _limits(
+        options, info.v_max_mps, info.omega_max_rps, cmd_v, cmd_w, want_odom, odom=odom_twist, notes=notes
+    )
     dt_s = float(np.median(np.diff(scan_t))) / 1e9 if len(scan_t) > 1 else 0.1
     topics = {role: name for role, name in info.topics.items() if role != "cmd" or not want_odom}
     meta = {
@@ -238,6 +244,32 @@ def import_log(
 
 _IDENTITY_Q = {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}
 
+#: a command value held by at least this share of the moving commands is one of their modes
+MODE_SHARE = 0.05
+#: a command this many times the robust limit is implausible (a note says so)
+WILD_FACTOR = 2.0
+
+
+def robust_limit(values: np.ndarray, *, derived: bool) -> float | None:
+    """A robot limit from commands (speed or turn rate), robust to a few wild ones.
+
+    >>> robust_limit(np.array([0.3] * 30 + [0.0] * 10 + [19.9]), derived=False)
+    0.3
+    """
+    a = np.abs(values[np.isfinite(values)])
+    if len(a) == 0:
+        return None
+    if derived:
+        return float(np.percentile(a, 95.0))
+    moving = a[a > 1e-3]
+    if len(moving) == 0:
+        return float(a.max())
+    vals, counts = np.unique(np.round(moving, 3), return_counts=True)
+    modes = vals[counts >= MODE_SHARE * len(moving)]
+    if len(modes) and counts.max() >= 2:
+        return float(modes.max())
+    return float(np.percentile(moving, 98.0))
+
 
 def _limits(
     options: ImportOptions,
@@ -246,12 +278,32 @@ def _limits(
     cmd_v: np.ndarray,
     cmd_w: np.ndarray,
     derived: bool,
+    odom: tuple[np.ndarray, np.ndarray] | None = None,
+    notes: list[str] | None = None,
 ) -> tuple[float | None, float | None, str]:
-    """Robot limits: the options, else the log's parameters, else the commands' range (None: unknown)."""
-    # derived commands carry odometry noise and pose jumps: their 95th percentile, not their maximum
-    q = 95.0 if derived else 100.0
-    v_cmd = float(np.percentile(np.abs(cmd_v), q)) if len(cmd_v) else None
-    w_cmd = float(np.percentile(np.abs(cmd_w), q)) if len(cmd_w) else None
+    """Robot limits: the options, else the log's parameters, else the commands' robust range.
+
+    Recorded commands give the largest of their *modes* (a value holding at least
+    :data:`MODE_SHARE` of the moving commands: a keyboard's speeds), else their 98th percentile;
+    never the maximum, which one wild command sets. Derived commands (odometry noise, pose jumps)
+    give their 95th percentile. Where the largest command is implausible beside that (more than
+    :data:`WILD_FACTOR` times it, or beyond the odometry's own 95th percentile as much), a note says so.
+    """
+    v_cmd = robust_limit(cmd_v, derived=derived)
+    w_cmd = robust_limit(cmd_w, derived=derived)
+    if notes is not None and not derived:
+        for name, unit, values, lim, k in (
+            ("speed", "m/s", cmd_v, v_cmd, 0),
+            ("turn rate", "rad/s", cmd_w, w_cmd, 1),
+        ):
+            top = float(np.nanmax(np.abs(values[np.isfinite(values)]))) if np.isfinite(values).any() else 0.0
+            seen = None if odom is None or len(odom[k]) < 10 else float(np.percentile(np.abs(odom[k]), 95))
+            if lim is not None and top > WILD_FACTOR * max(lim, seen or 0.0):
+                moved = "" if seen is None else f", odometry's 95th percentile {seen:.3g} {unit}"
+                notes.append(
+                    f"warning: implausible command {name} up to {top:.3g} {unit}: the limit is the commands' "
+                    f"usual {lim:.3g} {unit}{moved} (give --v-max/--omega-max to override)"
+                )
     out: list[float | None] = []
     whence: list[str] = []
     for opt, log, cmd in ((options.v_max_mps, v_log, v_cmd), (options.omega_max_rps, w_log, w_cmd)):

@@ -17,14 +17,15 @@ from lfdfuse.log.stamps import from_stamp, stamp
 TOPIC = "/teleop/input"
 SCHEMA = "lfdfuse.TeleopInput"
 
-Kind = Literal["key", "message", "end"]
+Kind = Literal["key", "message", "end", "handback"]
 
 
 @dataclass(frozen=True)
 class Input:
     """One key press (``kind="key"``, ``text`` a key name such as ``"i"`` or ``"up"``), one
     client message (``kind="message"``, ``text`` its JSON payload, ``schema`` its schema name),
-    or an end request (``kind="end"``, ``text`` why)."""
+    an end request (``kind="end"``, ``text`` why), or, when a network drives and the person
+    corrects (``teleop --table``), a hand-back of control to the network (``kind="handback"``)."""
 
     kind: Kind
     text: str

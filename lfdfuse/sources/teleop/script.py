@@ -6,10 +6,12 @@ first control period at or after its time; a command holds until the next entry.
 
 YAML: a list (or ``{inputs: [...]}``) of entries with ``t`` (seconds) and one of
 ``key`` (a key name of :mod:`~lfdfuse.sources.teleop.keys`: ``i``, ``up``, ``space``,
-``esc``, …), ``twist: [v, ω]`` (m/s, rad/s, as a client would publish it), or ``end: true``::
+``esc``, …), ``twist: [v, ω]`` (m/s, rad/s, as a client would publish it), ``end: true``, or
+(when a network drives, ``teleop --table``) ``handback: true``, which gives control back to it::
 
     - {t: 0.0, key: i}
     - {t: 2.5, twist: [0.3, 0.4]}
+    - {t: 6.0, handback: true}
     - {t: 9.0, key: esc}
 
 CSV: a header with ``t`` and ``key`` and/or ``v``, ``w`` columns; one entry per row, a
@@ -31,9 +33,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from lfdfuse.errors import ConfigError
+from lfdfuse.files import parse_yaml as read_yaml_text
 from lfdfuse.sources.teleop.inputs import Input
 
 SOURCE = "script"
@@ -70,15 +71,20 @@ def end_entry(t_s: float) -> ScriptEntry:
     return ScriptEntry(_t_ns(t_s, "t"), Input("end", "script ended", SOURCE))
 
 
+def handback_entry(t_s: float) -> ScriptEntry:
+    return ScriptEntry(_t_ns(t_s, "t"), Input("handback", "script", SOURCE))
+
+
 class ScriptInput:
     """An :class:`~lfdfuse.sources.teleop.inputs.InputSource` replaying entries by time.
 
-    The run ends at an ``end`` entry, or, without one, in the period of the last entry.
+    The run ends at an ``end`` entry, or, without one, in the period of the last entry — unless
+    ``end_with_last`` is False (a network drives on after the script's last correction).
     """
 
-    def __init__(self, entries: Sequence[ScriptEntry]) -> None:
+    def __init__(self, entries: Sequence[ScriptEntry], *, end_with_last: bool = True) -> None:
         ordered = sorted(entries, key=lambda e: e.t_ns)  # stable: same-time entries keep order
-        if ordered and not any(e.input.kind == "end" for e in ordered):
+        if end_with_last and ordered and not any(e.input.kind == "end" for e in ordered):
             # a script without an end ends with its last entry (which still takes effect)
             ordered.append(ScriptEntry(ordered[-1].t_ns, Input("end", "script ended", SOURCE)))
         self.entries = ordered
@@ -106,18 +112,17 @@ def load_script(path: str | Path) -> list[ScriptEntry]:
         raise ConfigError(f"cannot read teleop script {p}: {exc.strerror}") from None
     if p.suffix.lower() == ".csv":
         return parse_csv(text, name=str(p))
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"teleop script {p} is not valid YAML: {exc}") from None
-    return parse_yaml(data, name=str(p))
+    # the one capped YAML reader: one line naming the file and line, like every other YAML input
+    return parse_yaml(read_yaml_text(text, origin=f"teleop script {p}"), name=str(p))
 
 
 def parse_yaml(data: Any, *, name: str = "script") -> list[ScriptEntry]:
     if isinstance(data, dict) and set(data) == {"inputs"}:
         data = data["inputs"]
     if not isinstance(data, list) or not data:
-        raise ConfigError(f"{name}: a teleop script is a non-empty list of {{t: …, key|twist|end: …}}")
+        raise ConfigError(
+            f"{name}: a teleop script is a non-empty list of {{t: …, key|twist|end|handback: …}}"
+        )
     if len(data) > _MAX_ENTRIES:
         raise ConfigError(f"{name}: more than {_MAX_ENTRIES} entries")
     out: list[ScriptEntry] = []
@@ -125,12 +130,12 @@ def parse_yaml(data: Any, *, name: str = "script") -> list[ScriptEntry]:
         where = f"{name} entry {i + 1}"
         if not isinstance(item, dict) or "t" not in item:
             raise ConfigError(f"{where}: needs a time t")
-        unknown = set(item) - {"t", "key", "twist", "end"}
+        unknown = set(item) - {"t", "key", "twist", "end", "handback"}
         if unknown:
             raise ConfigError(f"{where}: unknown key {sorted(unknown)[0]!r}")
-        what = [k for k in ("key", "twist", "end") if k in item]
+        what = [k for k in ("key", "twist", "end", "handback") if k in item]
         if len(what) != 1:
-            raise ConfigError(f"{where}: give exactly one of key, twist, end")
+            raise ConfigError(f"{where}: give exactly one of key, twist, end, handback")
         t = _seconds(item["t"], f"{where}: t")
         if what[0] == "key":
             if not isinstance(item["key"], str) or not item["key"]:
@@ -141,8 +146,12 @@ def parse_yaml(data: Any, *, name: str = "script") -> list[ScriptEntry]:
             if not isinstance(tw, list) or len(tw) != 2:
                 raise ConfigError(f"{where}: twist must be [v, w] (m/s, rad/s)")
             out.append(twist_entry(t, _number(tw[0], f"{where}: v"), _number(tw[1], f"{where}: w")))
-        else:
+        elif item[what[0]] is not True:
+            raise ConfigError(f"{where}: {what[0]} must be true")
+        elif what[0] == "end":
             out.append(end_entry(t))
+        else:
+            out.append(handback_entry(t))
     return out
 
 

@@ -11,6 +11,12 @@ panel repeats its command at a fixed rate while a button is held). Goals are det
 :func:`teleop` composes the run: the recorder (the same channels as ``simulate``), a sink for
 ``/teleop/input``, any extra sinks (the Foxglove stream, the terminal view), all inside one
 :class:`~lfdfuse.log.writer.LogWriter`, so the MCAP appears atomically when the run ends.
+
+Corrections (``teleop --table``): given a ``network`` command source, the session asks it every
+period and drives with its proposal while it has *authority*; any key or valid client Twist
+hands authority to the person at once, ``h``, a ``handback`` input or ``handback_s`` seconds
+without input give it back. The session only decides who drives; what the network is (a fusion
+table) and what it records is the caller's (:mod:`lfdfuse.execute.correct`).
 """
 
 from __future__ import annotations
@@ -19,19 +25,20 @@ import math
 import signal
 import threading
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import FrameType
-from typing import Protocol
+from typing import Literal, Protocol
 
 import numpy as np
 
 from lfdfuse.errors import ConfigError
+from lfdfuse.log import lfd
 from lfdfuse.log.recorder import Recorder, provenance
 from lfdfuse.log.writer import LogWriter
-from lfdfuse.sim.loop import RunSummary, Sink, run
+from lfdfuse.sim.loop import GoalSource, RunSummary, Sink, run
 from lfdfuse.sim.robot import Pose, RobotParams
 from lfdfuse.sim.sensors import CameraParams, SensorParams, target_reached
 from lfdfuse.sim.simulator import Observation, Simulator
@@ -53,6 +60,10 @@ MAX_DURATION_S = 7200.0
 GOAL_REFRACTORY_STEPS = 10
 #: the shortest hold of a client command, however fast the client repeats
 MIN_TIMEOUT_S = 0.5
+#: the key that gives control back to the network (``teleop --table``)
+HANDBACK_KEY = "h"
+
+Authority = Literal["network", "person"]
 
 
 class Clock(Protocol):
@@ -102,6 +113,8 @@ class TeleopOptions:
     keys: KeyState = field(default_factory=KeyState)
     robot: RobotParams = field(default_factory=RobotParams)
     sensors: SensorParams = field(default_factory=SensorParams)
+    #: with a network driving: give control back after this many seconds without input (None: never)
+    handback_s: float | None = None
 
 
 @dataclass(frozen=True)
@@ -119,6 +132,7 @@ class Snapshot:
     inputs: int
     collisions: int
     ended: str
+    authority: str = "person"  # who drove this period: "person", or "network" (teleop --table)
 
 
 class TeleopSession:
@@ -134,8 +148,17 @@ class TeleopSession:
         keys: KeyState = KeyState(),
         twist_timeout_s: float | None = None,
         duration_s: float | None = None,
+        network: GoalSource | None = None,
+        handback_s: float | None = None,
     ) -> None:
         self.inputs = list(inputs)
+        self.network = network
+        self.handback_s = handback_s
+        #: who drives now, and through what (an input's source; empty for the network)
+        self.authority: Authority = "network" if network is not None else "person"
+        self.authority_source = ""
+        self._person_at = 0.0  # clock time of the person's last input
+        self.person_ticks = self.network_ticks = self.takeovers = 0
         self.clock = clock
         self.robot = robot
         self.camera = camera
@@ -173,15 +196,28 @@ class TeleopSession:
     # -- the command source -------------------------------------------------------------------
     def command(self, obs: Observation) -> tuple[float, float]:
         t = self._pace(obs.k)
+        # the network senses and proposes every period, also while the person drives: its goals,
+        # landmarks and odometry stay current, and the log shows what it would have done
+        proposal = self.network.command(obs) if self.network is not None else None
         for src in self.inputs:
             for inp in src.poll(t):
                 self._apply(inp, t)
+        if (
+            self.authority == "person"
+            and self.network is not None
+            and self.handback_s is not None
+            and not self.end_reason
+            and t - self._person_at >= self.handback_s - 1e-9
+        ):
+            self._hand_back(Input("handback", f"no input for {self.handback_s:g} s", "session"), t)
         if self._twist_at is not None and t - self._twist_at > self._timeout():
             self._twist_at = None
             self._set((0.0, 0.0))
             self._note(Input("message", "", "timeout"), "timeout", t)
         if not self.end_reason:
-            if self._stop.is_set():
+            if self.network is not None and self.network.done:
+                self._end("task complete", t)
+            elif self._stop.is_set():
                 self._end(self._stop_reason, t)
             elif self.duration_s is not None and t >= self.duration_s - 1e-9:
                 self._end("duration", t)
@@ -189,7 +225,16 @@ class TeleopSession:
         if obs.blocked and not self._blocked:
             self._collisions += 1
         self._blocked = obs.blocked
-        cmd = (0.0, 0.0) if self.end_reason else self._command
+        if self.authority == "person":
+            self.person_ticks += 1
+        else:
+            self.network_ticks += 1
+        if self.end_reason:
+            cmd = (0.0, 0.0)
+        elif self.authority == "network" and proposal is not None:
+            cmd = proposal
+        else:
+            cmd = self._command
         self.snapshot = Snapshot(
             t_s=obs.t_ns / 1e9,
             wall_s=t,
@@ -202,6 +247,7 @@ class TeleopSession:
             inputs=self.inputs_seen,
             collisions=self._collisions,
             ended=self.end_reason,
+            authority=self.authority,
         )
         return cmd
 
@@ -226,6 +272,14 @@ class TeleopSession:
         if self.end_reason:
             self._note(inp, "ignored", t)
             return
+        if inp.kind == "handback" or (
+            self.network is not None and inp.kind == "key" and inp.text == HANDBACK_KEY
+        ):
+            if self.network is None:
+                self._note(inp, "ignored (no network to hand back to)", t)
+            else:
+                self._hand_back(inp, t)
+            return
         if inp.kind == "key":
             eff = press(self.keys, inp.text, self.robot.drive)
             self.keys = eff.state
@@ -235,6 +289,7 @@ class TeleopSession:
                 self._end(f"key {inp.text}", t, inp)
                 return
             self._set(eff.state.command)
+            self._take(inp, t)
             effect = "stop" if eff.state.command == (0.0, 0.0) else "move"
             if inp.text in ("q", "z", "w", "x", "e", "c"):
                 effect = "scale"
@@ -248,6 +303,7 @@ class TeleopSession:
             return
         repeat = self._twist_at is not None and self._command == self._clip((v, w))
         self._set((v, w))
+        self._take(inp, t)
         if self.twist_timeout_s is not None:
             if repeat and self._twist_at is not None:
                 # a repeat of the held command: the client's publish interval
@@ -256,6 +312,22 @@ class TeleopSession:
             self._twist_at = t
         self._note(inp, "stop" if self._command == (0.0, 0.0) else "move", t)
         self.last_input = f"twist v={v:+.2f} w={w:+.2f}"
+
+    def _take(self, inp: Input, t: float) -> None:
+        """The person's input takes (or keeps) control."""
+        self._person_at = t
+        if self.authority != "person":
+            self.authority, self.authority_source = "person", inp.source
+            self.takeovers += 1
+
+    def _hand_back(self, inp: Input, t: float) -> None:
+        """Control goes back to the network; the person's held direction is dropped (speeds stay)."""
+        self.authority, self.authority_source = "network", ""
+        self.keys = KeyState(speed_mps=self.keys.speed_mps, turn_rps=self.keys.turn_rps)
+        self._twist_at = None
+        self._set((0.0, 0.0))
+        self._note(inp, "handback", t)
+        self.last_input = "handback"
 
     def _timeout(self) -> float:
         """How long a client command holds: ``twist_timeout_s``, or less for a client that
@@ -297,6 +369,20 @@ class TeleopSession:
             self._met_last[d.name] = obs.k
 
 
+class AuthorityRecorder:
+    """A sink writing who drove each period on ``/lfd/authority`` (runs with a network)."""
+
+    def __init__(self, log: LogWriter, session: TeleopSession) -> None:
+        self.log, self.session = log, session
+        log.add_topic(lfd.Authority.TOPIC, lfd.Authority.SCHEMA)
+
+    def record(self, obs: Observation, command: tuple[float, float]) -> None:
+        s = self.session
+        self.log.write_raw(
+            lfd.Authority.TOPIC, obs.t_ns, lfd.encode_authority(obs.t_ns, s.authority, s.authority_source)
+        )
+
+
 class InputRecorder:
     """A sink writing the session's inputs of each period on ``/teleop/input``."""
 
@@ -320,11 +406,18 @@ class TeleopSummary:
 
 
 def make_session(
-    opts: TeleopOptions, *, inputs: Sequence[InputSource], clock: Clock | None = None
+    opts: TeleopOptions,
+    *,
+    inputs: Sequence[InputSource],
+    clock: Clock | None = None,
+    network: GoalSource | None = None,
 ) -> TeleopSession:
-    """The session for a run: real time unless a clock is given (a :class:`SimClock` for scripts)."""
+    """The session for a run: real time unless a clock is given (a :class:`SimClock` for scripts);
+    with ``network``, the network drives until the person takes over."""
     if opts.duration_s is not None and not (opts.duration_s > 0 and math.isfinite(opts.duration_s)):
         raise ConfigError("duration must be a positive number of seconds")
+    if opts.handback_s is not None and not (opts.handback_s > 0 and math.isfinite(opts.handback_s)):
+        raise ConfigError("handback must be a positive number of seconds")
     return TeleopSession(
         inputs=inputs,
         clock=clock or WallClock(),
@@ -333,16 +426,26 @@ def make_session(
         keys=opts.keys,
         twist_timeout_s=opts.twist_timeout_s,
         duration_s=opts.duration_s,
+        network=network,
+        handback_s=opts.handback_s,
     )
 
 
 def teleop(
-    opts: TeleopOptions, *, session: TeleopSession, out: str | Path, sinks: Sequence[Sink] = ()
+    opts: TeleopOptions,
+    *,
+    session: TeleopSession,
+    out: str | Path,
+    sinks: Sequence[Sink] = (),
+    log_sinks: Sequence[Callable[[LogWriter], Sink]] = (),
+    metadata: Mapping[str, str] | None = None,
 ) -> TeleopSummary:
     """Run ``session`` until a key, the duration, or :meth:`TeleopSession.stop`; record ``out``.
 
-    The MCAP has the channels of ``simulate`` plus ``/teleop/input``, provenance ``teacher:
-    human``; it is written atomically when the run ends (an exception leaves nothing).
+    The MCAP has the channels of ``simulate`` plus ``/teleop/input`` (and, with a network,
+    ``/lfd/authority``), provenance ``teacher: human`` plus ``metadata``; ``log_sinks`` make
+    further sinks that write to the log. It is written atomically when the run ends (an
+    exception leaves nothing).
     """
     start = opts.start or Pose(*opts.world.start)
     check_pose_free(opts.world, start.as_tuple(), what="start pose", radius=opts.robot.radius_m)
@@ -356,22 +459,25 @@ def teleop(
         teacher="human",
         input=opts.input_name,
         start=",".join(repr(v) for v in start.as_tuple()),
+        **(metadata or {}),
     )
     sim = Simulator(opts.world, rng, opts.sensors, opts.robot)
     # the session ends a --duration run by its clock (simulated time never runs ahead of it);
     # the loop's own limit only bounds a run without one
     limit = min(opts.duration_s or MAX_DURATION_S, MAX_DURATION_S) + 1.0
     with LogWriter(out, metadata=meta) as log:
+        recorders: list[Sink] = [
+            Recorder(log, world=opts.world, sensors=opts.sensors),
+            InputRecorder(log, session),
+        ]
+        if session.network is not None:
+            recorders.append(AuthorityRecorder(log, session))
         summary = run(
             sim,
             session,
             start=start,
             duration_s=limit,
-            sinks=[
-                Recorder(log, world=opts.world, sensors=opts.sensors),
-                InputRecorder(log, session),
-                *sinks,
-            ],
+            sinks=[*recorders, *(make(log) for make in log_sinks), *sinks],
             out=str(out),
         )
         ended = session.end_reason or "time limit"

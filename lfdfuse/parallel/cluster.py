@@ -1,0 +1,85 @@
+"""Jobs on Dask (``dask.distributed``): a ``LocalCluster`` on this machine, or an existing cluster.
+
+Only imported when ``--workers`` or ``--scheduler`` asks for it (see :func:`lfdfuse.parallel.open_executor`),
+so the in-process default never loads Dask. The workers import lfdfuse themselves: on a remote
+cluster every worker needs the same lfdfuse installed, and the paths a job names must be readable
+there (a shared file system), since paths, not arrays, cross the wire.
+"""
+
+from __future__ import annotations
+
+import logging
+import uuid
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any, TypeVar
+
+from distributed import Client, LocalCluster, as_completed
+
+from lfdfuse.errors import ConfigError
+from lfdfuse.parallel.jobs import Outcome, guarded
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+class DaskExecutor:
+    """Submits every job to a Dask client and yields outcomes as they complete."""
+
+    def __init__(self, client: Client, cluster: LocalCluster | None = None) -> None:
+        self.client = client
+        self.cluster = cluster
+
+    @property
+    def address(self) -> str:
+        """The scheduler's address (``tcp://…``): what ``--scheduler`` takes."""
+        info = self.client.scheduler_info()
+        return str(info["address"])
+
+    @property
+    def slots(self) -> int:
+        threads = self.client.nthreads()
+        return max(1, sum(int(n) for n in threads.values()))
+
+    def run(self, fn: Callable[[T], R], items: Sequence[T]) -> Iterator[Outcome[R]]:
+        tag = uuid.uuid4().hex[:8]  # unique keys: Dask would otherwise reuse a result of the same key
+        futures = [
+            self.client.submit(guarded, fn, i, item, key=f"lfdfuse-{tag}-{i}", pure=False)
+            for i, item in enumerate(items)
+        ]
+        try:
+            for fut in as_completed(futures, loop=self.client.loop):
+                out: Outcome[R] = fut.result()
+                yield out
+        finally:
+            self.client.cancel(futures)
+
+    def close(self) -> None:
+        self.client.close()
+        if self.cluster is not None:
+            self.cluster.close()
+
+
+def local_cluster(workers: int) -> DaskExecutor:
+    """A ``LocalCluster`` of ``workers`` processes of one thread each (no dashboard, quiet logs)."""
+    cluster = LocalCluster(
+        n_workers=workers,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=None,
+        silence_logs=logging.ERROR,
+    )
+    return DaskExecutor(Client(cluster, set_as_default=False), cluster)
+
+
+def connect(address: str, *, timeout_s: float = 10.0) -> DaskExecutor:
+    """A client of the Dask scheduler at ``address`` (``tcp://HOST:8786``)."""
+    kwargs: dict[str, Any] = {"timeout": f"{timeout_s:g}s", "set_as_default": False}
+    try:
+        client = Client(address, **kwargs)
+    except (OSError, TimeoutError, ValueError) as exc:
+        reason = " ".join(str(exc).split()) or type(exc).__name__
+        raise ConfigError(f"cannot reach the Dask scheduler at {address}: {reason}") from None
+    if not client.nthreads():
+        client.close()
+        raise ConfigError(f"the Dask scheduler at {address} has no workers")
+    return DaskExecutor(client)

@@ -1,0 +1,183 @@
+"""Learning from a person at a keyboard (issue 19): keyboard-taught tasks and styles, closed loop.
+
+A scripted teacher becomes a person at a keyboard (``simulate --keys PERIOD``, the nearest
+``teleop_twist_keyboard`` key every PERIOD s, held); its demo is segmented and estimated with
+the default (``auto``) command model, and the learned table drives the robot:
+
+- ``three-goals``: the three-goal task in ``building``, keys every 0.5 s and 1.0 s, two seeds
+  each, each table run from three perturbed starts (completed in order, no collision);
+- ``tee-branch``: keep-left / keep-right taught with keys every 0.8 s in ``building`` and run in
+  ``tee`` into two T-junctions: the branch taken must be the style's.
+
+Each row also gives the scripted teacher's result (no keys) for the same cell as the baseline.
+
+    python -m lfdfuse.tools.bench --suite keys
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
+from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.network.table import FusionTable
+from lfdfuse.segment.pipeline import segment_file
+from lfdfuse.segment.read import read_segmented
+from lfdfuse.sim.robot import Pose
+from lfdfuse.sources.simulate import SimulateOptions, simulate
+from lfdfuse.sources.tasks import Leg, load_task
+from lfdfuse.world.model import load_world
+
+ROOT = Path(__file__).resolve().parents[2]
+TASK = ROOT / "sample_logs" / "three-goals.task.yaml"
+#: styles learned in one building and run in another: no target behaviours (tee has no targets)
+STYLE_BEHAVIORS = "avoid,wander_left,wander_right,wall_attract_left,wall_attract_right,sonar_avoid"
+
+#: (start, the branch a left-keeper takes, the test of the end pose for "went left")
+#: heading south down the west link into the wide lower corridor: left is east
+#: heading north up the east link into the upper corridor: left is west
+TEE_JUNCTIONS: tuple[tuple[tuple[float, float, float], str], ...] = (
+    ((7.0, 6.5, -math.pi / 2), "south"),
+    ((23.0, 5.5, math.pi / 2), "north"),
+)
+
+
+def went_left(end: np.ndarray, junction: str) -> bool | None:
+    """Which branch the run took at a tee junction: True left, False right, None neither."""
+    x = float(end[0])
+    if junction == "south":
+        return True if x > 9.0 else False if x < 5.0 else None
+    return True if x < 21.0 else False if x > 25.0 else None
+
+
+def learn(
+    legs: list[Leg],
+    *,
+    world: str,
+    keys: float | None,
+    seed: int,
+    folder: Path,
+    duration_s: float = 400.0,
+    segment_kw: dict[str, Any] | None = None,
+    estimate_kw: dict[str, Any] | None = None,
+) -> FusionTable:
+    """Demonstrate ``legs`` (at a keyboard when ``keys``), segment, estimate: the learned table."""
+    tag = f"{world}-{'-'.join(f'{g.target}{g.style}' for g in legs)}-{keys}-{seed}"
+    demo = folder / f"{tag}.mcap"
+    simulate(
+        SimulateOptions(
+            world=load_world(world),
+            legs=legs,
+            teacher_name="task",
+            duration_s=duration_s,
+            seed=seed,
+            keys_period_s=keys,
+        ),
+        out=demo,
+    )
+    seg = folder / f"{tag}.seg.mcap"
+    # the command line's defaults: --lag auto, --commands auto
+    segment_file(demo, out=seg, **({"lag_s": None} | (segment_kw or {})))
+    table, _, _ = estimate_run(read_segmented(seg), opts=EstimateOptions(seed=seed, **(estimate_kw or {})))
+    return table
+
+
+def three_goal_starts(n: int, *, seed: int) -> list[tuple[float, float, float]]:
+    """Starts near the demo's, as tests/execute's three-goal test draws them."""
+    rng = np.random.default_rng(seed)
+    return [
+        (4.0 + rng.uniform(-1.0, 1.0), 1.2 + rng.uniform(-0.35, 0.35), rng.uniform(-0.35, 0.35))
+        for _ in range(n)
+    ]
+
+
+def three_goals(
+    table: FusionTable, *, starts: list[tuple[float, float, float]], folder: Path, label: str
+) -> list[bool]:
+    """Whether each run from ``starts`` reached red, green, blue in order without a collision."""
+    out = []
+    for k, start in enumerate(starts):
+        res = drive_table(
+            ExecuteOptions(
+                world=load_world("building"), table=table, start=Pose(*start), max_time_s=300.0, seed=k
+            ),
+            out=folder / f"{label}-{k}.mcap",
+            command="bench",
+        )
+        rep = res.report
+        order = [
+            g["target"] for g in sorted((g for g in rep["goals"] if g["reached"]), key=lambda g: g["time_s"])
+        ]
+        out.append(bool(rep["completed"]) and order == ["red", "green", "blue"] and rep["collisions"] == 0)
+    return out
+
+
+def tee_branches(table: FusionTable, *, folder: Path, label: str) -> list[bool | None]:
+    """At each tee junction: True if the run went left, False right, None neither."""
+    out = []
+    for k, (start, junction) in enumerate(TEE_JUNCTIONS):
+        res = drive_table(
+            ExecuteOptions(world=load_world("tee"), table=table, start=Pose(*start), max_time_s=30.0, seed=k),
+            out=folder / f"{label}-tee{k}.mcap",
+            command="bench",
+        )
+        out.append(went_left(res.summary.poses[-1], junction))
+    return out
+
+
+def run(quick: bool = False) -> list[dict[str, Any]]:
+    legs = load_task(str(TASK))
+    rows: list[dict[str, Any]] = []
+    starts = three_goal_starts(3, seed=2026)
+    seeds = (1,) if quick else (1, 2)
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        for keys in (None, 0.5, 1.0):
+            done = []
+            for seed in seeds:
+                table = learn(legs, world="building", keys=keys, seed=seed, folder=folder)
+                done += three_goals(table, starts=starts, folder=folder, label=f"3g-{keys}-{seed}")
+            rows.append(
+                {
+                    "name": f"three-goals/{'scripted' if keys is None else f'keys {keys:g}'}",
+                    "completed": sum(done),
+                    "runs": len(done),
+                }
+            )
+        for style in ("keep-left", "keep-right"):
+            for keys in (None, 0.8):
+                right = 0
+                total = 0
+                for seed in seeds:
+                    table = learn(
+                        [Leg(None, style)],
+                        world="building",
+                        keys=keys,
+                        seed=seed,
+                        folder=folder,
+                        duration_s=300.0,
+                        segment_kw={"behaviors": STYLE_BEHAVIORS},
+                    )
+                    got = tee_branches(table, folder=folder, label=f"tee-{style}-{keys}-{seed}")
+                    want = style == "keep-left"
+                    right += sum(1 for g in got if g is want)
+                    total += len(got)
+                rows.append(
+                    {
+                        "name": f"tee-branch/{style}/{'scripted' if keys is None else f'keys {keys:g}'}",
+                        "completed": right,
+                        "runs": total,
+                    }
+                )
+    return rows
+
+
+if __name__ == "__main__":
+    for row in run(quick="--quick" in sys.argv):
+        print(row)

@@ -1,0 +1,76 @@
+"""`--help` reads cleanly at 80 columns (a pipe, many terminals) and at 120: prose wrapped by the
+terminal and not twice, examples whole on one line, arguments as SRC, flags without a placeholder,
+each default stated once."""
+
+from __future__ import annotations
+
+import inspect
+import re
+
+import pytest
+import typer
+import typer.rich_utils
+from typer.testing import CliRunner
+
+from lfdfuse.cli.main import app
+
+runner = CliRunner()
+COMMANDS = sorted(typer.main.get_group(app).commands)
+WIDTHS = (80, 120)
+
+
+def _help(args: list[str], width: int) -> str:
+    # typer reads the width once, at import (TERMINAL_WIDTH); a terminal's COLUMNS ends there
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(typer.rich_utils, "MAX_WIDTH", width)
+        res = runner.invoke(app, [*args, "--help"])
+    assert res.exit_code == 0, res.output
+    return res.stdout
+
+
+def _examples(name: str) -> list[str]:
+    cmd = typer.main.get_group(app).commands[name]
+    doc = inspect.getdoc(cmd.callback) or ""  # as written, before it became help text
+    return [
+        ln.split(": ", 1)[-1].strip() for ln in doc.splitlines() if "lfdfuse " in ln.split(": ", 1)[-1][:10]
+    ]
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+@pytest.mark.parametrize("name", COMMANDS)
+def test_help_reads_cleanly(name: str, width: int) -> None:
+    out = _help([name], width)
+    lines = out.splitlines()
+    assert all(len(ln) <= width for ln in lines), f"{name}: a line wider than {width}"
+    assert "<bool>" not in out, f"{name}: a flag shown with a <bool> placeholder"
+    assert not re.search(r"\{[a-z_]+\}", out), f"{name}: an argument shown as {{name}}"
+    # every example on one line, whole (a user copies it)
+    examples = _examples(name)
+    assert examples, f"{name} --help has no example"
+    for ex in examples:
+        assert any(ln.strip() == ex for ln in lines), f"{name} at {width}: example cut: {ex}"
+    # the prose is wrapped once, by the terminal: a line ends early only where its paragraph does
+    prose = lines[: next(i for i, ln in enumerate(lines) if ln.startswith("╭"))]
+    for a, b in zip(prose, prose[1:], strict=False):
+        if not a.strip() or not b.strip() or b.startswith("   ") or a.strip().endswith(":"):
+            continue
+        first = b.split()[0]
+        assert len(a.strip()) + 1 + len(first) > width - 2, f"{name} at {width}: wrapped early:\n{a}\n{b}"
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_each_default_is_stated_once(name: str) -> None:
+    cmd = typer.main.get_group(app).commands[name]
+    for p in cmd.params:
+        shown = getattr(p, "show_default", True) is not False and p.default not in (None, False, ())
+        if shown and p.help:
+            assert not re.search(r"\bdefault[:s]? ", p.help, re.I), (
+                f"{name} {p.name}: default said twice: {p.help}"
+            )
+
+
+def test_the_root_help_lists_every_command() -> None:
+    for width in WIDTHS:
+        out = _help([], width)
+        for name in COMMANDS:
+            assert re.search(rf"│ {name}\s", out), f"{name} missing from lfdfuse --help at {width}"

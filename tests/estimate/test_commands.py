@@ -1,0 +1,202 @@
+"""The discrete command model (DESIGN §6): bins, its likelihood, decisions not ticks."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import orjson
+import pytest
+
+from lfdfuse.estimate.commands import commands_of, decision_steps
+from lfdfuse.estimate.model import CommandBins, FusionModel, discrete_log_marginal, make_row
+from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
+from lfdfuse.estimate.smc import SMCParams, TemperedSMC
+from lfdfuse.log.reader import file_info, iter_attachments, iter_raw
+from lfdfuse.log.writer import LogWriter
+from lfdfuse.network.table import dump_table
+from lfdfuse.segment.pipeline import segment_file
+from lfdfuse.segment.read import read_segmented
+from lfdfuse.sources.simulate import SimulateOptions, simulate
+from lfdfuse.sources.tasks import Leg
+from lfdfuse.world.model import load_world
+
+KEYS = [0.0, 0.66, -0.66, math.pi / 2, -math.pi / 2]  # straight, arcs, turns in place
+
+
+def brute_force(
+    row_vectors: np.ndarray, lo: np.ndarray, hi: np.ndarray, w: np.ndarray, model: FusionModel
+) -> float:
+    """``log p(commands | w)`` by numerical integration over the noise, for one weight vector."""
+    x = np.linspace(-math.pi, math.pi, 100_001)
+    f = np.einsum("tnc,n->tc", row_vectors, w)
+    phi = np.arctan2(f[:, 1], f[:, 0])
+    lls = []
+    for k in model.discrete_kappas:
+        dens = np.exp(k * (np.cos(x) - 1))
+        dens /= np.trapezoid(dens, x)
+        total = 0.0
+        for t in range(len(phi)):
+            h = np.remainder(phi[t] + x + math.pi, 2 * math.pi) - math.pi
+            p = np.trapezoid(dens * ((h >= lo[t]) & (h < hi[t])), x)
+            total += math.log((1 - model.lapse) * p + model.lapse / len(KEYS))
+        lls.append(total)
+    a = np.array(lls)
+    return float(np.log(np.exp(a - a.max()).mean()) + a.max())
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_discrete_likelihood_is_the_probability_of_the_bin(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    bins = CommandBins.from_headings(KEYS)
+    t, n = 6, 3
+    v = rng.normal(size=(t, n, 2))
+    h = np.array(KEYS)[rng.integers(0, len(KEYS), t)]
+    row = make_row(v, np.stack([np.cos(h), np.sin(h)], -1), bins)
+    w = rng.dirichlet(np.ones(n), size=3)
+    got = discrete_log_marginal(row, w, FusionModel())  # type: ignore[arg-type]
+    want = [brute_force(v, row.lo, row.hi, wi, FusionModel()) for wi in w]  # type: ignore[union-attr]
+    assert np.allclose(got, want, atol=2e-3), (got, want)
+
+
+def test_bins_reach_beyond_the_arcs() -> None:
+    b = CommandBins.from_headings(KEYS)
+    e = b.edges
+    assert e[0] == -math.pi and e[-1] == math.pi and np.all(np.diff(e) > 0)
+    # a fused vector pointing backwards asks for a turn in place, in its direction
+    from lfdfuse.evaluate.holdout import bin_of
+
+    assert bin_of(b, np.array([2.5, -2.5, 0.1, 0.5])).tolist() == [4, 0, 2, 3]
+
+
+def test_the_sampler_concentrates_on_weights_that_put_the_commands_in_their_bins() -> None:
+    """Two behaviours, one pointing 60° left and one straight: a person pressing arcs left most of
+    the time (and straight sometimes) asks for the left one to weigh more, with 'straight' decisions
+    bounding it: the posterior mean lands between the bins' edges."""
+    rng = np.random.default_rng(4)
+    t = 60
+    a = np.radians(rng.uniform(40, 80, t))
+    v = np.stack([np.stack([np.cos(a), np.sin(a)], -1), np.tile([1.0, 0.0], (t, 1))], axis=1)
+    w_true = np.array([0.6, 0.4])
+    f = np.einsum("tnc,n->tc", v, w_true)
+    phi = np.arctan2(f[:, 1], f[:, 0]) + rng.normal(0, math.radians(5), t)
+    bins = CommandBins.from_headings(KEYS)
+    from lfdfuse.evaluate.holdout import bin_of
+
+    h = np.array(bins.headings)[bin_of(bins, phi)]
+    row = make_row(v, np.stack([np.cos(h), np.sin(h)], -1), bins)
+    res = TemperedSMC([row], trials=2, model=FusionModel(), params=SMCParams(particles=600), rng=rng).run()
+    mean = res.mean()[:, :2].mean(axis=0)
+    assert abs(mean[0] - w_true[0]) < 0.15, mean
+
+
+def rewrite_on_key_change(src: Path, dst: Path) -> int:
+    """The same log with ``/cmd_vel`` sent only when the command changes (as the Neato's teleop does)."""
+    meta = file_info(src).metadata.get("lfdfuse", {})
+    last = None
+    kept = 0
+    with LogWriter(dst, metadata=dict(meta)) as log:
+        for name, media, data in iter_attachments(src):
+            log.attach(name, media, data)
+        for raw in iter_raw(src):
+            if raw.topic == "/cmd_vel":
+                m = orjson.loads(raw.data)
+                cmd = (m["linear"]["x"], m["angular"]["z"])
+                if cmd == last:
+                    continue
+                last = cmd
+                kept += 1
+            log.copy(raw)
+    return kept
+
+
+def test_a_held_command_is_one_decision_however_often_the_log_repeats_it(tmp_path: Path) -> None:
+    """A log repeating the held command every tick and one sending it on key change only give
+    the same decisions and the same fusion table."""
+    demo = tmp_path / "keys.mcap"
+    simulate(
+        SimulateOptions(
+            world=load_world("building"),
+            legs=[Leg("red", "keep-left")],
+            teacher_name="task",
+            duration_s=40.0,
+            seed=2,
+            keys_period_s=0.6,
+        ),
+        out=demo,
+    )
+    sparse = tmp_path / "sparse.mcap"
+    kept = rewrite_on_key_change(demo, sparse)
+    tables = []
+    runs = []
+    for src in (demo, sparse):
+        seg = tmp_path / f"{src.stem}.seg.mcap"
+        segment_file(src, out=seg, lag_s=0.3)
+        run = read_segmented(seg)
+        runs.append(run)
+        table, _, _ = estimate_run(run, opts=EstimateOptions(seed=1))
+        tables.append(dump_table(table))
+    n = len(runs[0].t_ns)
+    assert kept < n / 3  # far fewer messages on key change
+    cm = commands_of(runs[0])
+    assert cm.mode == "discrete" and cm.decisions is not None
+    assert np.array_equal(cm.decisions, commands_of(runs[1]).decisions)
+    assert cm.decisions.sum() < 0.25 * n
+    assert tables[0] == tables[1]
+
+
+def test_decisions_are_presses_and_rechecks() -> None:
+    from dataclasses import replace
+
+    from lfdfuse.segment.read import SegmentedRun
+
+    n = 30
+    h = np.array([0.0] * 12 + [0.66] * 3 + [0.0] * 15)
+    inf = np.ones(n, dtype=bool)
+    inf[20:22] = False  # a stop
+    base = SegmentedRun(
+        names=("avoid",),
+        t_ns=np.arange(n, dtype=np.int64) * 100_000_000,
+        vectors=np.zeros((n, 1, 2)),
+        applicable=np.ones((n, 1), dtype=bool),
+        goal_met=np.zeros((n, 1), dtype=bool),
+        demo=np.stack([np.cos(h), np.sin(h)], -1),
+        informative=inf,
+        bac=np.ones(n, dtype=np.int64),
+        segment_of=np.zeros(n, dtype=np.int64),
+        segments=(),
+        metadata={},
+    )
+    assert np.nonzero(decision_steps(base, recheck_s=None))[0].tolist() == [0, 12, 15, 20, 22]
+    assert np.nonzero(decision_steps(base, recheck_s=1.0))[0].tolist() == [0, 10, 12, 15, 20, 22]
+    assert replace(base, metadata={"segment_commands": "continuous"}) is not None
+    assert commands_of(replace(base, metadata={"segment_commands": "continuous"})).mode == "continuous"
+    assert commands_of(base).mode == "discrete"  # auto: two distinct headings
+
+
+def test_commands_and_lag_on_the_command_line(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from lfdfuse.cli.main import app
+    from lfdfuse.network.table import load_table
+    from tests.conftest import ROOT
+
+    runner = CliRunner()
+    demo = ROOT / "sample_logs" / "keep-left-building.mcap"
+    seg = tmp_path / "d.seg.mcap"
+    bad = runner.invoke(app, ["segment", str(demo), "--lag", "soon", "-o", str(seg)])
+    assert bad.exit_code == 1 and bad.output.startswith("error: --lag") and not seg.exists()
+    bad = runner.invoke(app, ["segment", str(demo), "--commands", "morse", "-o", str(seg)])
+    assert bad.exit_code == 2 and "morse" in bad.output and not seg.exists()  # a bad choice: usage
+    res = runner.invoke(app, ["segment", str(demo), "--commands", "discrete", "-o", str(seg)])
+    assert res.exit_code == 0, res.output
+    meta = read_segmented(seg).metadata
+    assert meta["segment_commands"] == "discrete"
+    assert float(meta["segment_lag_s"]) >= 0.0  # --lag auto: the best-explaining lag, recorded
+    for forced, want in (("auto", "discrete"), ("continuous", "continuous")):
+        out = tmp_path / f"{forced}.yaml"
+        res = runner.invoke(app, ["estimate", str(seg), "--commands", forced, "-o", str(out)])
+        assert res.exit_code == 0, res.output
+        by = load_table(out).estimated_by
+        assert by["commands"] == want and by["lag_s"] == meta["segment_lag_s"]
