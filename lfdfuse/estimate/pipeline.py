@@ -24,7 +24,7 @@ import numpy as np
 
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.baselines import angle_errors
-from lfdfuse.estimate.commands import commands_of
+from lfdfuse.estimate.commands import Commands, commands_of
 from lfdfuse.estimate.methods import (
     EstimateOptions,
     Method,
@@ -55,6 +55,7 @@ __all__ = [
     "Method",
     "RowEstimate",
     "SegmentSteps",
+    "decided",
     "estimate_group",
     "estimate_groups",
     "estimate_pooled",
@@ -139,16 +140,32 @@ class SegmentSteps:
     bins: CommandBins | None  # its command set (discrete)
 
 
+def decided(run: SegmentedRun, opts: EstimateOptions) -> tuple[SegmentedRun, Commands]:
+    """``run`` as its command model observes it, and the model: a discrete demo (a person at a
+    keyboard) is observed once per decision, not each tick a command was held (DESIGN §6), so its
+    informative steps narrow to its decisions."""
+    cm = commands_of(run, requested=opts.commands, recheck_s=opts.model.recheck_s)
+    if cm.decisions is not None:
+        run = replace(run, informative=run.informative & cm.decisions)
+    return run, cm
+
+
 def estimate_segments(
-    run: SegmentedRun, *, opts: EstimateOptions, rng: np.random.Generator, table_default: bool = True
+    run: SegmentedRun,
+    *,
+    opts: EstimateOptions,
+    rng: np.random.Generator,
+    table_default: bool = True,
+    commands: Commands | None = None,
 ) -> SegmentSteps:
     """Estimate every group of ``run.segments`` and each segment's default fit (and the table's,
-    with ``table_default``) in one pass of the method. A discrete command model (a person at a
-    keyboard) observes each decision once, not each tick it was held (DESIGN §6)."""
+    with ``table_default``) in one pass of the method. ``commands``: the run is already
+    :func:`decided` under that model (else it is decided here)."""
     check_options(opts)
-    cm = commands_of(run, requested=opts.commands, recheck_s=opts.model.recheck_s)
-    if cm.decisions is not None:  # discrete: one observation per decision, not per tick
-        run = replace(run, informative=run.informative & cm.decisions)
+    if commands is None:
+        run, cm = decided(run, opts)
+    else:
+        cm = commands
     groups = groups_of(run)
     live = [g for g in groups if len(g.steps)]
     problems = [(run.vectors[g.steps][:, list(g.behaviors), :], run.demo[g.steps]) for g in live]
@@ -295,8 +312,12 @@ def estimate_pooled(
     a row no further demo touched comes out bit-identical to the first demo's.
     """
     check_options(opts)
+    # every demo as its own command model observes it (a keyboard demo: its decisions), so the
+    # pooled groups count what the first demo's own estimate counts
+    models = [decided(r, opts) for r in runs]
+    runs = [r for r, _ in models]
     al = align(runs)
-    base = estimate_segments(runs[0], opts=opts, rng=run_rng(runs[0], opts))
+    base = estimate_segments(runs[0], opts=opts, rng=run_rng(runs[0], opts), commands=models[0][1])
     # the first demo's rows and per-step defaults by pooled step
     own: dict[tuple[int, int], FusionRow] = {}
     own_default: dict[int, dict[str, float] | None] = {}
