@@ -3,7 +3,8 @@
 :func:`learn` is the one path from segmented demonstrations to a :class:`FusionTable` that
 ``lfdfuse estimate``, the paper's experiments, the benches, the round trips and the tests call:
 several demos are pooled into one table (:func:`lfdfuse.estimate.pipeline.estimate_runs`); each
-demo is read once (its ``/lfd/*`` channels, and with sub-goals its ``/scan`` and ``/pose``),
+demo is read in one pass over its messages (its ``/lfd/*`` channels, and with sub-goals its
+``/scan`` and ``/pose`` too: :func:`lfdfuse.segment.read.read_segmented_and_run`),
 estimated once (:func:`lfdfuse.estimate.pipeline.estimate_run`), and with ``subgoals`` the table
 is refined at the demo's decision points (:func:`lfdfuse.estimate.subgoals.refine`), which
 estimates only the new sub-segment rows. :func:`learn_run` is the same on a run in memory.
@@ -23,11 +24,10 @@ from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run, estimate_runs
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.run import ExecuteOptions, drive_table
-from lfdfuse.log.reader import read_run
 from lfdfuse.network.table import FusionTable
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, LandmarkTrack
 from lfdfuse.segment.pipeline import segment_file
-from lfdfuse.segment.read import SegmentedRun, read_segmented
+from lfdfuse.segment.read import SegmentedRun, read_segmented, read_segmented_and_run
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import Leg
@@ -87,9 +87,13 @@ def learn(
         raise ConfigError("learning needs at least one demonstration")
     if len(demos) == 1:
         src = demos[0]
-        run = read_segmented(src)
         name = Path(src).name
-        track = track_of(read_run(src), run, source=str(src)) if options.subgoals else None
+        track: LandmarkTrack | None = None
+        if options.subgoals:
+            run, raw = read_segmented_and_run(src)
+            track = track_of(raw, run, source=str(src))
+        else:
+            run = read_segmented(src)
         return learn_run(run, options=options, track=track, name=name, progress=progress)
     if options.subgoals:
         raise ConfigError(
