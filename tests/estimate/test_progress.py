@@ -127,3 +127,15 @@ def test_estimate_prints_cleanly_when_piped(demo: Path, tmp_path: Path) -> None:
     for junk in ("\r", "\x1b[", "-:--:--", "━"):
         assert junk not in res.stdout, repr(junk)
     assert res.stdout.startswith(f"estimate {demo} → {out}")
+
+
+def test_pooled_learning_reports_progress_that_only_grows(demo: Path, tmp_path: Path) -> None:
+    """Two demos: the first one's pass, then the rows the second adds steps to, in one range."""
+    twin = tmp_path / "twin.seg.mcap"
+    twin.write_bytes(demo.read_bytes())
+    calls: list[tuple[float, float]] = []
+    opts = EstimateOptions(trials=2, smc=replace(SMCParams(), particles=64))
+    learn([demo, twin], options=LearnOptions(estimate=opts), progress=lambda d, t: calls.append((d, t)))
+    f = _fractions(calls)
+    assert len(f) >= 10 and np.all(np.diff(f) >= -1e-12) and f[-1] == pytest.approx(1.0), f
+    assert ((f > 0.5) & (f < 0.99)).sum() >= 3, f  # the pooled rows report too, not only the first pass
