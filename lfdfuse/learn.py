@@ -16,7 +16,7 @@ network teacher) demonstrates in a world, and the demo is segmented.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -25,6 +25,7 @@ from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run, estimate_ru
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.network.table import FusionTable
+from lfdfuse.progress import Progress, part
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, LandmarkTrack
 from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.segment.read import SegmentedRun, read_segmented, read_segmented_and_run
@@ -60,15 +61,23 @@ def learn_run(
     options: LearnOptions = LearnOptions(),
     track: LandmarkTrack | None = None,
     name: str = "demo",
-    progress: Callable[[float, float], None] | None = None,
+    progress: Progress | None = None,
 ) -> LearnResult:
-    """The table of a segmented run in memory; ``track`` (its landmark cues) is needed for sub-goals."""
-    table, groups, skipped = estimate_run(run, opts=options.estimate, name=name, progress=progress)
+    """The table of a segmented run in memory; ``track`` (its landmark cues) is needed for sub-goals.
+
+    ``progress`` is told how far learning is, many times over a long estimate. With sub-goals
+    the first pass is the first half: the refinement estimates the decided segments again, at
+    most as much work again (where the decisions are is known only after the first pass).
+    """
+    if options.subgoals and track is None:
+        raise ConfigError("sub-goals need the demo's landmark track (its /scan and /pose)")
+    share = 0.5 if options.subgoals else 1.0
+    first = part(progress, start=0.0, size=share, total=1.0)
+    table, groups, skipped = estimate_run(run, opts=options.estimate, name=name, progress=first)
     decisions: tuple[DecisionPoint, ...] = ()
-    if options.subgoals:
-        if track is None:
-            raise ConfigError("sub-goals need the demo's landmark track (its /scan and /pose)")
-        res = refine(table, run, track, opts=options.estimate, params=options.decisions)
+    if options.subgoals and track is not None:
+        then = part(progress, start=share, size=1.0 - share, total=1.0)
+        res = refine(table, run, track, opts=options.estimate, params=options.decisions, progress=then)
         table, decisions = res.table, res.decisions
     return LearnResult(table, groups, skipped, decisions, (name,))
 
@@ -77,7 +86,7 @@ def learn(
     demos: Sequence[str | Path],
     *,
     options: LearnOptions = LearnOptions(),
-    progress: Callable[[float, float], None] | None = None,
+    progress: Progress | None = None,
 ) -> LearnResult:
     """The fusion table of segmented demo logs, pooled (:mod:`lfdfuse.estimate.pool`): a row's
     likelihood is the product over the demos that met its (step, BAC); each demo keeps its own

@@ -16,7 +16,7 @@ Reading the log and refining the table with sub-goals are the caller's (:mod:`lf
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -47,6 +47,7 @@ from lfdfuse.estimate.pool import (
     same_behaviors,
 )
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step, default_weights_for
+from lfdfuse.progress import Progress, part, tell
 from lfdfuse.segment.read import SegmentedRun
 
 __all__ = [
@@ -157,10 +158,12 @@ def estimate_segments(
     rng: np.random.Generator,
     table_default: bool = True,
     commands: Commands | None = None,
+    progress: Progress | None = None,
 ) -> SegmentSteps:
     """Estimate every group of ``run.segments`` and each segment's default fit (and the table's,
     with ``table_default``) in one pass of the method. ``commands``: the run is already
-    :func:`decided` under that model (else it is decided here)."""
+    :func:`decided` under that model (else it is decided here). ``progress`` is told how far the
+    pass is, many times over a long one."""
     check_options(opts)
     if commands is None:
         run, cm = decided(run, opts)
@@ -183,7 +186,7 @@ def estimate_segments(
             hit = len(uniq) - 1
         slot.append(hit)
     problems += [(run.vectors[s][:, idx, :], run.demo[s]) for s in uniq]
-    est = estimate_groups(problems, opts=opts, rng=rng, bins=cm.bins)
+    est = estimate_groups(problems, opts=opts, rng=rng, bins=cm.bins, progress=progress)
     rows: dict[int, list[FusionRow]] = {s.index: [] for s in run.segments}
     for g, e, (vec, demo) in zip(live, est, problems, strict=False):
         err = float(np.degrees(angle_errors(vec, demo, e.weights).mean()))
@@ -258,10 +261,12 @@ def _row(
     parts: Sequence[tuple[int, np.ndarray]],
     opts: EstimateOptions,
     bins: CommandBins | None,
+    progress: Progress | None = None,
 ) -> tuple[RowEstimate, float]:
     """One row's estimate on ``parts`` (its own random stream) and its mean heading error (°)."""
     vec, demo = problem_of(parts, runs, g.behaviors)
-    e = estimate_groups([(vec, demo)], opts=opts, rng=row_rng(opts.seed, ROW, g.step, g.bac), bins=bins)[0]
+    rng = row_rng(opts.seed, ROW, g.step, g.bac)
+    e = estimate_groups([(vec, demo)], opts=opts, rng=rng, bins=bins, progress=progress)[0]
     err = float(np.degrees(angle_errors(vec, demo, e.weights).mean()))
     return e, err if math.isfinite(err) else 180.0
 
@@ -301,7 +306,7 @@ def estimate_pooled(
     runs: Sequence[SegmentedRun],
     *,
     opts: EstimateOptions,
-    progress: Callable[[float, float], None] | None = None,
+    progress: Progress | None = None,
 ) -> PooledSteps:
     """Estimate the rows of one or more demos pooled (:mod:`lfdfuse.estimate.pool`).
 
@@ -317,7 +322,27 @@ def estimate_pooled(
     models = [decided(r, opts) for r in runs]
     runs = [r for r, _ in models]
     al = align(runs)
-    base = estimate_segments(runs[0], opts=opts, rng=run_rng(runs[0], opts), commands=models[0][1])
+    groups = pooled_groups(runs, al)
+    live = [g for g in groups if g.samples]
+    idx, dparts = _default_parts(runs, al, opts)
+    redo = [g for g in live if g.samples != g.samples_of(0)]
+    refit = [  # the steps of each default fit estimated again (not the first demo's, not a repeat)
+        sum(len(s) for _, s in p)
+        if p is not None and any(d for d, _ in p) and not any(_same_parts(q, p) for q in dparts[:j])
+        else 0
+        for j, p in enumerate(dparts)
+    ]
+    # progress in steps sampled: the first demo's pass (its rows and default fits: about twice
+    # its informative steps), then the rows and default fits the other demos add steps to
+    first = 2.0 * float(runs[0].informative.sum())
+    total = first + float(sum(g.samples for g in redo) + sum(refit))
+    base = estimate_segments(
+        runs[0],
+        opts=opts,
+        rng=run_rng(runs[0], opts),
+        commands=models[0][1],
+        progress=part(progress, start=0.0, size=first, total=total),
+    )
     # the first demo's rows and per-step defaults by pooled step
     own: dict[tuple[int, int], FusionRow] = {}
     own_default: dict[int, dict[str, float] | None] = {}
@@ -325,18 +350,15 @@ def estimate_pooled(
         own_default[j] = st.default_weights
         for r in st.fusion:
             own[(j, r.bac)] = r
-    groups = pooled_groups(runs, al)
-    live = [g for g in groups if g.samples]
-    idx, dparts = _default_parts(runs, al, opts)
-    redo = [g for g in live if g.samples != g.samples_of(0)]
-    total, done = max(1, len(redo)), 0
+    done = first
     names = runs[0].names
     rows: dict[int, list[FusionRow]] = {i: [] for i in range(len(al.goals))}
     for g in live:
         if g.samples == g.samples_of(0):
             rows[g.step].append(own[(g.step, g.bac)])
             continue
-        e, err = _row(g, runs, [p for p in g.parts if len(p[1])], opts, base.bins)
+        sub = part(progress, start=done, size=float(g.samples), total=total)
+        e, err = _row(g, runs, [p for p in g.parts if len(p[1])], opts, base.bins, sub)
         app = [names[i] for i in g.behaviors]
         before = own.get((g.step, g.bac))
         rows[g.step].append(
@@ -355,9 +377,7 @@ def estimate_pooled(
                 weights_before=None if before is None else dict(before.weights),
             )
         )
-        done += 1
-        if progress is not None:
-            progress(float(done), float(total))
+        done += g.samples
     fits: list[dict[str, float] | None] = []
     for j, parts in enumerate(dparts):
         if parts is None:
@@ -371,11 +391,13 @@ def estimate_pooled(
             fits.append(fits[same])
             continue
         vec, demo = problem_of(parts, runs, idx)
-        e = estimate_groups([(vec, demo)], opts=opts, rng=row_rng(opts.seed, DEFAULT, j), bins=base.bins)[0]
+        sub = part(progress, start=done, size=float(refit[j]), total=total)
+        rng = row_rng(opts.seed, DEFAULT, j)
+        e = estimate_groups([(vec, demo)], opts=opts, rng=rng, bins=base.bins, progress=sub)[0]
+        done += refit[j]
         fit = {names[i]: round(float(x), 4) for i, x in zip(idx, e.weights, strict=True) if x >= 1e-4}
         fits.append(fit or None)
-    if progress is not None:
-        progress(float(total), float(total))
+    tell(progress, total, total)
     goals = [g[len("attract_") :] if g and g.startswith("attract_") else None for g in al.goals]
     steps = tuple(
         Step(nm, goal, tuple(rows[i]), None, fits[1 + i])
@@ -395,7 +417,7 @@ def estimate_runs(
     *,
     opts: EstimateOptions,
     names: Sequence[str],
-    progress: Callable[[float, float], None] | None = None,
+    progress: Progress | None = None,
 ) -> tuple[FusionTable, int, int]:
     """The fusion table of one or more segmented runs pooled (named ``names``, the first names the
     network); returns it with the row and skipped counts. Several demos must share their
@@ -438,7 +460,7 @@ def estimate_run(
     *,
     opts: EstimateOptions,
     name: str = "demo",
-    progress: Callable[[float, float], None] | None = None,
+    progress: Progress | None = None,
 ) -> tuple[FusionTable, int, int]:
     """The fusion table of a segmented run; returns it with the group and skipped counts."""
     return estimate_runs([run], opts=opts, names=[name], progress=progress)
