@@ -146,14 +146,16 @@ def demonstrate(
     start: tuple[float, float, float] | None = None,
     behaviors: str | None = None,
     measure_lag: bool = True,
+    keys_period_s: float | None = None,
 ) -> Demonstration:
     """Demonstrate in ``world`` and segment: ``folder/name.mcap`` and ``folder/name.seg.mcap``
     (``folder`` is created).
 
     ``teacher`` is a task's legs (the scripted style teacher, ``simulate --teacher``, named
     ``teacher_name`` in the log) or a fusion table (the network teacher, ``simulate --teacher
-    TABLE``, with ``heading_noise_rad``). ``behaviors`` (default: the segment preset, or the
-    table's behaviours) and ``measure_lag`` are ``segment``'s.
+    TABLE``, with ``heading_noise_rad``); ``keys_period_s`` makes a task's teacher a person at a
+    keyboard (``simulate --keys``). ``behaviors`` (default: the segment preset, or the table's
+    behaviours) and ``measure_lag`` are ``segment``'s.
     """
     folder.mkdir(parents=True, exist_ok=True)
     raw, seg = folder / f"{name}.mcap", folder / f"{name}.seg.mcap"
@@ -179,6 +181,7 @@ def demonstrate(
                 duration_s=duration_s,
                 seed=seed,
                 start=pose,
+                keys_period_s=keys_period_s,
             ),
             out=raw,
         )
