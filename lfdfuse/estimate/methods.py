@@ -17,6 +17,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
+from typing import NamedTuple
 
 import numpy as np
 
@@ -29,8 +30,15 @@ from lfdfuse.estimate.paper import PFParams, normalise, run_filter
 from lfdfuse.estimate.smc import SMCParams, TemperedSMC
 from lfdfuse.segment.commands import CommandMode
 
-#: one group's ``(vectors (T, n, 2), demo (T, 2))``
-Problem = tuple[np.ndarray, np.ndarray]
+class Problem(NamedTuple):
+    """One group's steps: ``vectors (T, n, 2)``, ``demo (T, 2)`` and, for the discrete command
+    model, the heading interval each step observes ``bounds (T, 2)`` (None: the bin of the
+    demonstrated command; see :func:`~lfdfuse.estimate.model.make_row`). A plain
+    ``(vectors, demo)`` pair is a problem too."""
+
+    vectors: np.ndarray
+    demo: np.ndarray
+    bounds: np.ndarray | None = None
 
 
 class Method(StrEnum):
@@ -103,7 +111,8 @@ def _pf_rows(
     """One batched SMC pass over every problem with ≥ 2 behaviours and ≥ 1 step."""
     out: list[RowEstimate | None] = [None] * len(problems)
     todo = []
-    for i, (vec, _demo) in enumerate(problems):
+    for i, p in enumerate(problems):
+        vec = p.vectors
         n = vec.shape[1]
         if n == 1:
             out[i] = RowEstimate(np.ones(1), np.zeros(1), np.zeros(1) if opts.trials > 1 else None, True)
@@ -118,12 +127,12 @@ def _pf_rows(
     per_pass = max(1, CHAIN_BATCH // k)
     for b in range(0, len(todo), per_pass):
         batch = todo[b : b + per_pass]
-        datas = [make_row(*problems[i], bins) for i in batch]
+        datas = [make_row(problems[i].vectors, problems[i].demo, bins, problems[i].bounds) for i in batch]
         smc = TemperedSMC(datas, trials=k, model=opts.model, params=opts.smc, rng=rng)
         res = smc.run()
         means, covs, particles = res.mean(), res.cov(), res.weights
         for j, i in enumerate(batch):
-            n = problems[i][0].shape[1]
+            n = problems[i].vectors.shape[1]
             cov = covs[j * k : (j + 1) * k, :n, :n].mean(axis=0)
             pinned = identifiable(cov, opts.model)
             if pinned:
@@ -155,7 +164,7 @@ def _paper_rows(
 ) -> list[RowEstimate]:
     out = []
     k = opts.trials
-    for vectors, demo in problems:
+    for vectors, demo, _ in problems:
         if vectors.shape[1] == 1:
             out.append(_single(k))
             continue
@@ -177,7 +186,7 @@ def _fit_rows(
     ) -> list[RowEstimate]:
         out = []
         k = opts.trials
-        for vectors, demo in problems:
+        for vectors, demo, _ in problems:
             t, n, _ = vectors.shape
             if n == 1:
                 out.append(_single(k))
@@ -244,15 +253,15 @@ def check_options(opts: EstimateOptions) -> None:
 
 
 def estimate_groups(
-    problems: Sequence[Problem],
+    problems: Sequence[Problem | tuple[np.ndarray, np.ndarray]],
     *,
     opts: EstimateOptions,
     rng: np.random.Generator,
     bins: CommandBins | None = None,
 ) -> list[RowEstimate]:
-    """Estimates for groups given as ``(vectors (T, n, 2), demo (T, 2))`` pairs, in order
-    (``bins``: the discrete command model's command set; only ``pf`` models it)."""
-    return estimator(opts.method).rows(problems, opts, rng, bins)
+    """Estimates for groups given as :class:`Problem` s or ``(vectors (T, n, 2), demo (T, 2))``
+    pairs, in order (``bins``: the discrete command model's command set; only ``pf`` models it)."""
+    return estimator(opts.method).rows([Problem(*p) for p in problems], opts, rng, bins)
 
 
 def estimate_group(

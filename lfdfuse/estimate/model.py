@@ -79,6 +79,7 @@ class FusionModel:
     discrete_kappa_points: int = 16
     lapse: float = 0.02
     recheck_s: float | None = 1.0  # a held command is decided again this often (None: only presses)
+    nudge_s: float | None = 1.0  # a press undone within this long is a nudge (None: no nudges)
 
     @cached_property
     def kappas(self) -> np.ndarray:
@@ -175,6 +176,21 @@ class CommandBins:
         h = np.array(self.headings)
         return np.asarray(np.argmin(np.abs(np.asarray(heading)[..., None] - h), axis=-1))
 
+    def bounds_of(self, heading: np.ndarray) -> np.ndarray:
+        """The bin ``(T, 2)`` (rad) of the command nearest each of ``heading (T,)``."""
+        c = self.index(heading)
+        e = self.edges
+        return np.stack([e[c], e[c + 1]], axis=-1)
+
+    def mirrored(self) -> CommandBins:
+        """The set closed under left ↔ right: every command's heading and its negative.
+
+        >>> [round(h, 2) for h in CommandBins((-1.57, 0.0)).mirrored().headings]
+        [-1.57, 0.0, 1.57]
+        """
+        h = np.array(self.headings)
+        return CommandBins.from_headings(np.unique(np.round(np.concatenate([h, -h]), 9)))
+
 
 @dataclass(frozen=True)
 class DiscreteRowData:
@@ -199,18 +215,25 @@ class DiscreteRowData:
 Row = RowData | DiscreteRowData
 
 
-def make_row(vectors: np.ndarray, demo: np.ndarray, bins: CommandBins | None = None) -> Row:
+def make_row(
+    vectors: np.ndarray,
+    demo: np.ndarray,
+    bins: CommandBins | None = None,
+    bounds: np.ndarray | None = None,
+) -> Row:
     """The row data of either command model: continuous without ``bins``, else discrete, where
-    each demonstrated heading is the command nearest it in the set and the row holds its bin."""
+    each step observes the heading interval ``bounds (T, 2)`` (rad, ``lo < hi``; see
+    :func:`~lfdfuse.estimate.commands.observed_bounds`) or, without them, the bin of the command
+    nearest its demonstrated heading."""
     if bins is None:
         return row_data(vectors, demo)
-    c = bins.index(np.arctan2(demo[:, 1], demo[:, 0]))
-    e = bins.edges
+    if bounds is None:
+        bounds = bins.bounds_of(np.arctan2(demo[:, 1], demo[:, 0]))
     return DiscreteRowData(
         np.ascontiguousarray(vectors[..., 0]),
         np.ascontiguousarray(vectors[..., 1]),
-        e[c],
-        e[c + 1],
+        np.ascontiguousarray(bounds[:, 0]),
+        np.ascontiguousarray(bounds[:, 1]),
         bins.size,
     )
 

@@ -28,6 +28,7 @@ from lfdfuse.estimate.commands import commands_of
 from lfdfuse.estimate.methods import (
     EstimateOptions,
     Method,
+    Problem,
     RowEstimate,
     check_options,
     estimate_group,
@@ -146,12 +147,22 @@ def estimate_segments(
     with ``table_default``) in one pass of the method. A discrete command model (a person at a
     keyboard) observes each decision once, not each tick it was held (DESIGN §6)."""
     check_options(opts)
-    cm = commands_of(run, requested=opts.commands, recheck_s=opts.model.recheck_s)
+    cm = commands_of(
+        run, requested=opts.commands, recheck_s=opts.model.recheck_s, nudge_s=opts.model.nudge_s
+    )
     if cm.decisions is not None:  # discrete: one observation per decision, not per tick
         run = replace(run, informative=run.informative & cm.decisions)
+    bounds = cm.bounds
     groups = groups_of(run)
     live = [g for g in groups if len(g.steps)]
-    problems = [(run.vectors[g.steps][:, list(g.behaviors), :], run.demo[g.steps]) for g in live]
+    problems = [
+        Problem(
+            run.vectors[g.steps][:, list(g.behaviors), :],
+            run.demo[g.steps],
+            None if bounds is None else bounds[g.steps],
+        )
+        for g in live
+    ]
     idx, masks = _default_masks(run, opts, table_default=table_default)
     # a step's default fit over the same steps as the table's is the same fit: do it once
     uniq: list[np.ndarray] = []
@@ -165,10 +176,12 @@ def estimate_segments(
             uniq.append(m)
             hit = len(uniq) - 1
         slot.append(hit)
-    problems += [(run.vectors[s][:, idx, :], run.demo[s]) for s in uniq]
+    problems += [
+        Problem(run.vectors[s][:, idx, :], run.demo[s], None if bounds is None else bounds[s]) for s in uniq
+    ]
     est = estimate_groups(problems, opts=opts, rng=rng, bins=cm.bins)
     rows: dict[int, list[FusionRow]] = {s.index: [] for s in run.segments}
-    for g, e, (vec, demo) in zip(live, est, problems, strict=False):
+    for g, e, (vec, demo, _) in zip(live, est, problems, strict=False):
         err = float(np.degrees(angle_errors(vec, demo, e.weights).mean()))
         names = [run.names[i] for i in g.behaviors]
         rows[g.segment].append(
