@@ -93,7 +93,9 @@ def observed_bounds(run: SegmentedRun, bins: CommandBins, *, nudge_s: float | No
     inf = run.informative
     presses = np.nonzero(decision_steps(run, recheck_s=None))[0]
     within = int(round(nudge_s * 1e9))
-    for before, press, back in zip(presses[:-2].tolist(), presses[1:-1].tolist(), presses[2:].tolist()):
+    for before, press, back in zip(
+        presses[:-2].tolist(), presses[1:-1].tolist(), presses[2:].tolist(), strict=True
+    ):
         if not (inf[before] and inf[press] and inf[back]):
             continue
         if abs(h[back] - h[before]) > SAME_HEADING_RAD or run.t_ns[back] - run.t_ns[press] >= within:

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
 from typing import NamedTuple
 
@@ -29,6 +29,7 @@ from lfdfuse.estimate.paper import Likelihood as LikelihoodName
 from lfdfuse.estimate.paper import PFParams, normalise, run_filter
 from lfdfuse.estimate.smc import SMCParams, TemperedSMC
 from lfdfuse.segment.commands import CommandMode
+
 
 class Problem(NamedTuple):
     """One group's steps: ``vectors (T, n, 2)``, ``demo (T, 2)`` and, for the discrete command
@@ -125,10 +126,13 @@ def _pf_rows(
     # rows are sampled in batches: the sampler's arrays grow with the rows it holds, and an
     # hour-long demo has hundreds of rows (a batch is one pass for any ordinary demo)
     per_pass = max(1, CHAIN_BATCH // k)
+    params = opts.smc
+    if bins is not None:
+        params = replace(params, particles=params.particles * params.discrete_factor)
     for b in range(0, len(todo), per_pass):
         batch = todo[b : b + per_pass]
         datas = [make_row(problems[i].vectors, problems[i].demo, bins, problems[i].bounds) for i in batch]
-        smc = TemperedSMC(datas, trials=k, model=opts.model, params=opts.smc, rng=rng)
+        smc = TemperedSMC(datas, trials=k, model=opts.model, params=params, rng=rng)
         res = smc.run()
         means, covs, particles = res.mean(), res.cov(), res.weights
         for j, i in enumerate(batch):

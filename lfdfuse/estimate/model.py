@@ -111,6 +111,11 @@ class FusionModel:
         )
         return np.asarray(c / c[:, -1:])
 
+    @cached_property
+    def vm_cdf_rows(self) -> np.ndarray:
+        """:attr:`vm_cdf` transposed ``(G + 1, J)``, contiguous (the likelihood's lookup table)."""
+        return np.ascontiguousarray(self.vm_cdf.T)
+
 
 #: grid cells of the tabulated von Mises CDF over a full turn (0.18°: fine for σ ≥ 2°)
 CDF_GRID = 2048
@@ -272,20 +277,21 @@ def sum_cos(data: RowData, w: np.ndarray) -> np.ndarray:
 
 
 def _cdf_at(x: np.ndarray, table: np.ndarray) -> np.ndarray:
-    """The tabulated CDFs ``table (J, G + 1)`` at ``x (…)`` in ``[−π, π]`` → ``(J, …)`` (linear)."""
+    """The tabulated CDFs ``table (G + 1, J)`` at ``x (…)`` in ``[−π, π]`` → ``(…, J)`` (linear;
+    the nodes last, so each lookup gathers one contiguous row)."""
     pos = (np.clip(x, -math.pi, math.pi) + math.pi) * (CDF_GRID / (2.0 * math.pi))
     i = np.minimum(pos.astype(np.int64), CDF_GRID - 1)
-    f = pos - i
-    lo = table[:, i]
-    return np.asarray(lo + f * (table[:, i + 1] - lo))
+    f = (pos - i)[..., None]
+    lo = table[i]
+    return np.asarray(lo + f * (table[i + 1] - lo))
 
 
 def discrete_log_marginal(data: DiscreteRowData, w: np.ndarray, model: FusionModel) -> np.ndarray:
     """``log p(c₁…c_T | w)`` of the discrete model, ``κ`` integrated out: ``w (P, n)`` → ``(P,)``."""
     wt = np.ascontiguousarray(w.T)
-    table = model.vm_cdf
-    j = table.shape[0]
-    ll = np.zeros((j, w.shape[0]))
+    table = model.vm_cdf_rows
+    j = table.shape[1]
+    ll = np.zeros((w.shape[0], j))
     block = max(16, BLOCK_ELEMENTS // max(1, w.shape[0] * j))
     lapse = model.lapse / max(1, data.commands)
     for c in range(0, data.steps, block):
@@ -296,11 +302,16 @@ def discrete_log_marginal(data: DiscreteRowData, w: np.ndarray, model: FusionMod
         lo = np.remainder(data.lo[c : c + block, None] - phi + math.pi, 2.0 * math.pi) - math.pi
         hi = lo + width
         wrap = hi > math.pi
-        p = _cdf_at(np.where(wrap, hi - 2.0 * math.pi, hi), table) + wrap - _cdf_at(lo, table)
+        p = _cdf_at(np.where(wrap, hi - 2.0 * math.pi, hi), table) + wrap[..., None] - _cdf_at(lo, table)
         zero = np.hypot(a, b) <= 1e-12
-        p = np.where(zero, width / (2.0 * math.pi), p)
-        ll += np.log((1.0 - model.lapse) * np.clip(p, 0.0, 1.0) + lapse).sum(axis=1)
-    return np.asarray(logsumexp(ll, axis=0) - math.log(j))
+        p = np.where(zero[..., None], (width / (2.0 * math.pi))[..., None], p)
+        # (steps, particles, nodes) in place: the largest temporaries of a discrete row
+        np.clip(p, 0.0, 1.0, out=p)
+        p *= 1.0 - model.lapse
+        p += lapse
+        np.log(p, out=p)
+        ll += p.sum(axis=0)
+    return np.asarray(logsumexp(ll, axis=1) - math.log(j))
 
 
 def row_loglik(data: Row, w: np.ndarray, model: FusionModel) -> np.ndarray:

@@ -24,7 +24,7 @@ import numpy as np
 
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.baselines import angle_errors
-from lfdfuse.estimate.commands import commands_of
+from lfdfuse.estimate.commands import commands_of, decision_steps, observed_bounds
 from lfdfuse.estimate.methods import (
     EstimateOptions,
     Method,
@@ -147,9 +147,7 @@ def estimate_segments(
     with ``table_default``) in one pass of the method. A discrete command model (a person at a
     keyboard) observes each decision once, not each tick it was held (DESIGN §6)."""
     check_options(opts)
-    cm = commands_of(
-        run, requested=opts.commands, recheck_s=opts.model.recheck_s, nudge_s=opts.model.nudge_s
-    )
+    cm = commands_of(run, requested=opts.commands, recheck_s=opts.model.recheck_s, nudge_s=opts.model.nudge_s)
     if cm.decisions is not None:  # discrete: one observation per decision, not per tick
         run = replace(run, informative=run.informative & cm.decisions)
     bounds = cm.bounds
@@ -232,6 +230,19 @@ def run_rng(run: SegmentedRun, opts: EstimateOptions) -> np.random.Generator:
     return np.random.default_rng([opts.seed, len(run.t_ns)])
 
 
+def observed(
+    run: SegmentedRun, opts: EstimateOptions, bins: CommandBins | None
+) -> tuple[SegmentedRun, np.ndarray | None]:
+    """``run`` as the rows of a pooled estimate see it: with ``bins`` (a discrete first demo) only
+    its decisions are informative, and each step's observed heading interval ``(N, 2)`` in that
+    command set comes with it; without, the run as it is (every tick, the continuous model)."""
+    if bins is None:
+        return run, None
+    decided = decision_steps(run, recheck_s=opts.model.recheck_s)
+    narrowed = replace(run, informative=run.informative & decided)
+    return narrowed, observed_bounds(run, bins, nudge_s=opts.model.nudge_s)
+
+
 # ------------------------------------------------------------------------------ pooled demos
 
 
@@ -254,11 +265,12 @@ def _row(
     parts: Sequence[tuple[int, np.ndarray]],
     opts: EstimateOptions,
     bins: CommandBins | None,
+    bounds: Sequence[np.ndarray] | None,
 ) -> tuple[RowEstimate, float]:
     """One row's estimate on ``parts`` (its own random stream) and its mean heading error (°)."""
-    vec, demo = problem_of(parts, runs, g.behaviors)
-    e = estimate_groups([(vec, demo)], opts=opts, rng=row_rng(opts.seed, ROW, g.step, g.bac), bins=bins)[0]
-    err = float(np.degrees(angle_errors(vec, demo, e.weights).mean()))
+    p = problem_of(parts, runs, g.behaviors, bounds)
+    e = estimate_groups([p], opts=opts, rng=row_rng(opts.seed, ROW, g.step, g.bac), bins=bins)[0]
+    err = float(np.degrees(angle_errors(p.vectors, p.demo, e.weights).mean()))
     return e, err if math.isfinite(err) else 180.0
 
 
@@ -317,9 +329,14 @@ def estimate_pooled(
         own_default[j] = st.default_weights
         for r in st.fusion:
             own[(j, r.bac)] = r
-    groups = pooled_groups(runs, al)
+    # what each demo's rows observe: for a discrete first demo, every demo's decisions and the
+    # heading intervals they observe in the first demo's command set (its rows came out so)
+    seen = [observed(run, opts, base.bins) for run in runs]
+    views = [v for v, _ in seen]
+    bounds = None if base.bins is None else [b for _, b in seen if b is not None]
+    groups = pooled_groups(views, al)
     live = [g for g in groups if g.samples]
-    idx, dparts = _default_parts(runs, al, opts)
+    idx, dparts = _default_parts(views, al, opts)
     redo = [g for g in live if g.samples != g.samples_of(0)]
     total, done = max(1, len(redo)), 0
     names = runs[0].names
@@ -328,7 +345,7 @@ def estimate_pooled(
         if g.samples == g.samples_of(0):
             rows[g.step].append(own[(g.step, g.bac)])
             continue
-        e, err = _row(g, runs, [p for p in g.parts if len(p[1])], opts, base.bins)
+        e, err = _row(g, views, [p for p in g.parts if len(p[1])], opts, base.bins, bounds)
         app = [names[i] for i in g.behaviors]
         before = own.get((g.step, g.bac))
         rows[g.step].append(
@@ -362,8 +379,8 @@ def estimate_pooled(
         if same is not None:
             fits.append(fits[same])
             continue
-        vec, demo = problem_of(parts, runs, idx)
-        e = estimate_groups([(vec, demo)], opts=opts, rng=row_rng(opts.seed, DEFAULT, j), bins=base.bins)[0]
+        prob = problem_of(parts, views, idx, bounds)
+        e = estimate_groups([prob], opts=opts, rng=row_rng(opts.seed, DEFAULT, j), bins=base.bins)[0]
         fit = {names[i]: round(float(x), 4) for i, x in zip(idx, e.weights, strict=True) if x >= 1e-4}
         fits.append(fit or None)
     if progress is not None:

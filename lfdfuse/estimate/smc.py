@@ -39,6 +39,9 @@ class SMCParams:
     """Settings of the sampler (see the module docstring)."""
 
     particles: int = 384
+    #: rows of the discrete command model run with this many times ``particles``: their posterior
+    #: is broad and flat-topped (bins), so its mean settles slowly, and they hold few decisions
+    discrete_factor: int = 4
     ess_target: float = 0.5
     moves: int = 3  # Metropolis moves after each resampling
     final_moves: int = 6  # moves at β = 1 before a chain is frozen
