@@ -3,8 +3,9 @@
 ``segment`` records which model a demo needs (metadata ``segment_commands``, see
 :mod:`lfdfuse.segment.commands`); ``estimate --commands`` can force either. For the discrete
 model this module finds, from the demonstrated headings alone (each command stands for one
-heading under the drive mapping), the command set (:class:`~lfdfuse.estimate.model.CommandBins`)
-and the decision steps: see :mod:`lfdfuse.estimate.model` for the model itself.
+heading under the drive mapping), the command set (:class:`~lfdfuse.estimate.model.CommandBins`),
+the decision steps and the heading interval each step observes (its command's bin, or at a nudge
+the interval between two commands): see :mod:`lfdfuse.estimate.model` for the model itself.
 """
 
 from __future__ import annotations
