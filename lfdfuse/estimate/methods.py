@@ -126,12 +126,12 @@ def _pf_rows(
     # rows are sampled in batches: the sampler's arrays grow with the rows it holds, and an
     # hour-long demo has hundreds of rows (a batch is one pass for any ordinary demo)
     per_pass = max(1, CHAIN_BATCH // k)
-    params = opts.smc
-    if bins is not None:
-        params = replace(params, particles=params.particles * params.discrete_factor)
     for b in range(0, len(todo), per_pass):
         batch = todo[b : b + per_pass]
         datas = [make_row(problems[i].vectors, problems[i].demo, bins, problems[i].bounds) for i in batch]
+        params = opts.smc
+        if bins is not None and sum(d.steps for d in datas) <= params.discrete_few:
+            params = replace(params, particles=params.particles * params.discrete_factor)
         smc = TemperedSMC(datas, trials=k, model=opts.model, params=params, rng=rng)
         res = smc.run()
         means, covs, particles = res.mean(), res.cov(), res.weights
