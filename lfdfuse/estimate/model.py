@@ -64,9 +64,11 @@ straight, arc right, turn in place right — and holds each until the next press
   ``command_accuracy``) but carry no heading: the primitives steer a forward-moving robot.
 
 The prior on ``w`` is the same Dirichlet. The SMC sampler needs only ``log p(data | w)`` per
-particle (:func:`row_loglik`), so both command models share it; a discrete row's posterior is
-broad and flat-topped (bins, few decisions), so its mean is sampled with
-:attr:`~lfdfuse.estimate.smc.SMCParams.discrete_factor` times the particles.
+particle (:func:`row_loglik`), so both command models share it. A discrete row of few decisions
+has a broad, flat-topped posterior (bins) whose mean settles slowly: a pass of such rows (at most
+``SMCParams.discrete_few`` decisions) is sampled with ``SMCParams.discrete_factor`` times the
+particles (on the TurtleBot log the held-out command accuracy flipped between 9 and 10 of 21 with
+the seed at 384 particles, and held at 10 over six seeds at 4 × 384).
 
 Measured and left out (held-out error on the TurtleBot and Neato keyboard logs, ``evaluate``,
 30 % held out): a *persistence* term (a kept key explained by a chance ``ρ`` of keeping it,
