@@ -15,8 +15,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
+from typing import NamedTuple
 
 import numpy as np
 
@@ -30,8 +31,16 @@ from lfdfuse.estimate.smc import SMCParams, TemperedSMC
 from lfdfuse.progress import Progress, part, tell
 from lfdfuse.segment.commands import CommandMode
 
-#: one group's ``(vectors (T, n, 2), demo (T, 2))``
-Problem = tuple[np.ndarray, np.ndarray]
+
+class Problem(NamedTuple):
+    """One group's steps: ``vectors (T, n, 2)``, ``demo (T, 2)`` and, for the discrete command
+    model, the heading interval each step observes ``bounds (T, 2)`` (None: the bin of the
+    demonstrated command; see :func:`~lfdfuse.estimate.model.make_row`). A plain
+    ``(vectors, demo)`` pair is a problem too."""
+
+    vectors: np.ndarray
+    demo: np.ndarray
+    bounds: np.ndarray | None = None
 
 
 class Method(StrEnum):
@@ -114,7 +123,8 @@ def _pf_rows(
     in steps sampled (a row's steps × its share of the sampler's pass), every iteration."""
     out: list[RowEstimate | None] = [None] * len(problems)
     todo = []
-    for i, (vec, _demo) in enumerate(problems):
+    for i, p in enumerate(problems):
+        vec = p.vectors
         n = vec.shape[1]
         if n == 1:
             out[i] = RowEstimate(np.ones(1), np.zeros(1), np.zeros(1) if opts.trials > 1 else None, True)
@@ -132,9 +142,12 @@ def _pf_rows(
     tell(progress, 0.0, total)
     for b in range(0, len(todo), per_pass):
         batch = todo[b : b + per_pass]
-        size = float(sum(problems[i][0].shape[0] for i in batch))
-        datas = [make_row(*problems[i], bins) for i in batch]
-        smc = TemperedSMC(datas, trials=k, model=opts.model, params=opts.smc, rng=rng)
+        size = float(sum(problems[i].vectors.shape[0] for i in batch))
+        datas = [make_row(problems[i].vectors, problems[i].demo, bins, problems[i].bounds) for i in batch]
+        params = opts.smc
+        if bins is not None and sum(d.steps for d in datas) <= params.discrete_few:
+            params = replace(params, particles=params.particles * params.discrete_factor)
+        smc = TemperedSMC(datas, trials=k, model=opts.model, params=params, rng=rng)
         for _ in smc:
             tell(progress, done + size * smc.progress, total)
         res = smc.result()
@@ -142,7 +155,7 @@ def _pf_rows(
         tell(progress, done, total)
         means, covs, particles = res.mean(), res.cov(), res.weights
         for j, i in enumerate(batch):
-            n = problems[i][0].shape[1]
+            n = problems[i].vectors.shape[1]
             cov = covs[j * k : (j + 1) * k, :n, :n].mean(axis=0)
             pinned = identifiable(cov, opts.model)
             if pinned:
@@ -180,10 +193,13 @@ def _paper_rows(
     out = []
     k = opts.trials
     # a filter makes max(T, min_updates) updates at least (short groups are passed over again)
-    cost = [0.0 if v.shape[1] == 1 else float(max(v.shape[0], opts.pf.min_updates, 1)) for v, _ in problems]
+    cost = [
+        0.0 if p.vectors.shape[1] == 1 else float(max(p.vectors.shape[0], opts.pf.min_updates, 1))
+        for p in problems
+    ]
     total, done = sum(cost), 0.0
     tell(progress, 0.0, total)
-    for (vectors, demo), c in zip(problems, cost, strict=True):
+    for (vectors, demo, _), c in zip(problems, cost, strict=True):
         if vectors.shape[1] == 1:
             out.append(_single(k))
             continue
@@ -208,9 +224,9 @@ def _fit_rows(fit: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> RowsFn:
     ) -> list[RowEstimate]:
         out = []
         k = opts.trials
-        total, done = float(sum(v.shape[0] for v, _ in problems)), 0.0
+        total, done = float(sum(p.vectors.shape[0] for p in problems)), 0.0
         tell(progress, 0.0, total)
-        for vectors, demo in problems:
+        for vectors, demo, _ in problems:
             t, n, _ = vectors.shape
             if n == 1:
                 out.append(_single(k))
@@ -279,17 +295,18 @@ def check_options(opts: EstimateOptions) -> None:
 
 
 def estimate_groups(
-    problems: Sequence[Problem],
+    problems: Sequence[Problem | tuple[np.ndarray, np.ndarray]],
     *,
     opts: EstimateOptions,
     rng: np.random.Generator,
     bins: CommandBins | None = None,
     progress: Progress | None = None,
 ) -> list[RowEstimate]:
-    """Estimates for groups given as ``(vectors (T, n, 2), demo (T, 2))`` pairs, in order
-    (``bins``: the discrete command model's command set; only ``pf`` models it). ``progress`` is
-    told ``(done, total)`` as the work goes (many times for a long pass), ending at ``total``."""
-    out = estimator(opts.method).rows(problems, opts, rng, bins, progress)
+    """Estimates for groups given as :class:`Problem` s or ``(vectors (T, n, 2), demo (T, 2))``
+    pairs, in order (``bins``: the discrete command model's command set; only ``pf`` models it).
+    ``progress`` is told ``(done, total)`` as the work goes (many times for a long pass), ending
+    at ``total``."""
+    out = estimator(opts.method).rows([Problem(*p) for p in problems], opts, rng, bins, progress)
     tell(progress, 1.0, 1.0)
     return out
 

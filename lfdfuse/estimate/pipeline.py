@@ -24,10 +24,11 @@ import numpy as np
 
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.baselines import angle_errors
-from lfdfuse.estimate.commands import Commands, commands_of
+from lfdfuse.estimate.commands import commands_of, decision_steps, observed_bounds
 from lfdfuse.estimate.methods import (
     EstimateOptions,
     Method,
+    Problem,
     RowEstimate,
     check_options,
     estimate_group,
@@ -56,7 +57,6 @@ __all__ = [
     "Method",
     "RowEstimate",
     "SegmentSteps",
-    "decided",
     "estimate_group",
     "estimate_groups",
     "estimate_pooled",
@@ -141,37 +141,33 @@ class SegmentSteps:
     bins: CommandBins | None  # its command set (discrete)
 
 
-def decided(run: SegmentedRun, opts: EstimateOptions) -> tuple[SegmentedRun, Commands]:
-    """``run`` as its command model observes it, and the model: a discrete demo (a person at a
-    keyboard) is observed once per decision, not each tick a command was held (DESIGN §6), so its
-    informative steps narrow to its decisions."""
-    cm = commands_of(run, requested=opts.commands, recheck_s=opts.model.recheck_s)
-    if cm.decisions is not None:
-        run = replace(run, informative=run.informative & cm.decisions)
-    return run, cm
-
-
 def estimate_segments(
     run: SegmentedRun,
     *,
     opts: EstimateOptions,
     rng: np.random.Generator,
     table_default: bool = True,
-    commands: Commands | None = None,
     progress: Progress | None = None,
 ) -> SegmentSteps:
     """Estimate every group of ``run.segments`` and each segment's default fit (and the table's,
-    with ``table_default``) in one pass of the method. ``commands``: the run is already
-    :func:`decided` under that model (else it is decided here). ``progress`` is told how far the
-    pass is, many times over a long one."""
+    with ``table_default``) in one pass of the method. A discrete command model (a person at a
+    keyboard) observes each decision once, not each tick it was held (DESIGN §6). ``progress``
+    is told how far the pass is, many times over a long one."""
     check_options(opts)
-    if commands is None:
-        run, cm = decided(run, opts)
-    else:
-        cm = commands
+    cm = commands_of(run, requested=opts.commands, recheck_s=opts.model.recheck_s, nudge_s=opts.model.nudge_s)
+    if cm.decisions is not None:  # discrete: one observation per decision, not per tick
+        run = replace(run, informative=run.informative & cm.decisions)
+    bounds = cm.bounds
     groups = groups_of(run)
     live = [g for g in groups if len(g.steps)]
-    problems = [(run.vectors[g.steps][:, list(g.behaviors), :], run.demo[g.steps]) for g in live]
+    problems = [
+        Problem(
+            run.vectors[g.steps][:, list(g.behaviors), :],
+            run.demo[g.steps],
+            None if bounds is None else bounds[g.steps],
+        )
+        for g in live
+    ]
     idx, masks = _default_masks(run, opts, table_default=table_default)
     # a step's default fit over the same steps as the table's is the same fit: do it once
     uniq: list[np.ndarray] = []
@@ -185,10 +181,12 @@ def estimate_segments(
             uniq.append(m)
             hit = len(uniq) - 1
         slot.append(hit)
-    problems += [(run.vectors[s][:, idx, :], run.demo[s]) for s in uniq]
+    problems += [
+        Problem(run.vectors[s][:, idx, :], run.demo[s], None if bounds is None else bounds[s]) for s in uniq
+    ]
     est = estimate_groups(problems, opts=opts, rng=rng, bins=cm.bins, progress=progress)
     rows: dict[int, list[FusionRow]] = {s.index: [] for s in run.segments}
-    for g, e, (vec, demo) in zip(live, est, problems, strict=False):
+    for g, e, (vec, demo, _) in zip(live, est, problems, strict=False):
         err = float(np.degrees(angle_errors(vec, demo, e.weights).mean()))
         names = [run.names[i] for i in g.behaviors]
         rows[g.segment].append(
@@ -239,6 +237,19 @@ def run_rng(run: SegmentedRun, opts: EstimateOptions) -> np.random.Generator:
     return np.random.default_rng([opts.seed, len(run.t_ns)])
 
 
+def observed(
+    run: SegmentedRun, opts: EstimateOptions, bins: CommandBins | None
+) -> tuple[SegmentedRun, np.ndarray | None]:
+    """``run`` as the rows of a pooled estimate see it: with ``bins`` (a discrete first demo) only
+    its decisions are informative, and each step's observed heading interval ``(N, 2)`` in that
+    command set comes with it; without, the run as it is (every tick, the continuous model)."""
+    if bins is None:
+        return run, None
+    decided = decision_steps(run, recheck_s=opts.model.recheck_s)
+    narrowed = replace(run, informative=run.informative & decided)
+    return narrowed, observed_bounds(run, bins, nudge_s=opts.model.nudge_s)
+
+
 # ------------------------------------------------------------------------------ pooled demos
 
 
@@ -261,13 +272,14 @@ def _row(
     parts: Sequence[tuple[int, np.ndarray]],
     opts: EstimateOptions,
     bins: CommandBins | None,
+    bounds: Sequence[np.ndarray] | None,
     progress: Progress | None = None,
 ) -> tuple[RowEstimate, float]:
     """One row's estimate on ``parts`` (its own random stream) and its mean heading error (°)."""
-    vec, demo = problem_of(parts, runs, g.behaviors)
+    p = problem_of(parts, runs, g.behaviors, bounds)
     rng = row_rng(opts.seed, ROW, g.step, g.bac)
-    e = estimate_groups([(vec, demo)], opts=opts, rng=rng, bins=bins, progress=progress)[0]
-    err = float(np.degrees(angle_errors(vec, demo, e.weights).mean()))
+    e = estimate_groups([p], opts=opts, rng=rng, bins=bins, progress=progress)[0]
+    err = float(np.degrees(angle_errors(p.vectors, p.demo, e.weights).mean()))
     return e, err if math.isfinite(err) else 180.0
 
 
@@ -317,14 +329,18 @@ def estimate_pooled(
     a row no further demo touched comes out bit-identical to the first demo's.
     """
     check_options(opts)
-    # every demo as its own command model observes it (a keyboard demo: its decisions), so the
-    # pooled groups count what the first demo's own estimate counts
-    models = [decided(r, opts) for r in runs]
-    runs = [r for r, _ in models]
     al = align(runs)
-    groups = pooled_groups(runs, al)
+    # what each demo's rows observe: for a discrete first demo, every demo's decisions and the
+    # heading intervals they observe in the first demo's command set (its rows come out so)
+    bins = commands_of(
+        runs[0], requested=opts.commands, recheck_s=opts.model.recheck_s, nudge_s=opts.model.nudge_s
+    ).bins
+    seen = [observed(run, opts, bins) for run in runs]
+    views = [v for v, _ in seen]
+    bounds = None if bins is None else [b for _, b in seen if b is not None]
+    groups = pooled_groups(views, al)
     live = [g for g in groups if g.samples]
-    idx, dparts = _default_parts(runs, al, opts)
+    idx, dparts = _default_parts(views, al, opts)
     redo = [g for g in live if g.samples != g.samples_of(0)]
     refit = [  # the steps of each default fit estimated again (not the first demo's, not a repeat)
         sum(len(s) for _, s in p)
@@ -334,13 +350,12 @@ def estimate_pooled(
     ]
     # progress in steps sampled: the first demo's pass (its rows and default fits: about twice
     # its informative steps), then the rows and default fits the other demos add steps to
-    first = 2.0 * float(runs[0].informative.sum())
+    first = 2.0 * float(views[0].informative.sum())
     total = first + float(sum(g.samples for g in redo) + sum(refit))
     base = estimate_segments(
         runs[0],
         opts=opts,
         rng=run_rng(runs[0], opts),
-        commands=models[0][1],
         progress=part(progress, start=0.0, size=first, total=total),
     )
     # the first demo's rows and per-step defaults by pooled step
@@ -358,7 +373,7 @@ def estimate_pooled(
             rows[g.step].append(own[(g.step, g.bac)])
             continue
         sub = part(progress, start=done, size=float(g.samples), total=total)
-        e, err = _row(g, runs, [p for p in g.parts if len(p[1])], opts, base.bins, sub)
+        e, err = _row(g, views, [p for p in g.parts if len(p[1])], opts, base.bins, bounds, sub)
         app = [names[i] for i in g.behaviors]
         before = own.get((g.step, g.bac))
         rows[g.step].append(
@@ -390,10 +405,11 @@ def estimate_pooled(
         if same is not None:
             fits.append(fits[same])
             continue
-        vec, demo = problem_of(parts, runs, idx)
+        prob = problem_of(parts, views, idx, bounds)
         sub = part(progress, start=done, size=float(refit[j]), total=total)
-        rng = row_rng(opts.seed, DEFAULT, j)
-        e = estimate_groups([(vec, demo)], opts=opts, rng=rng, bins=base.bins, progress=sub)[0]
+        e = estimate_groups(
+            [prob], opts=opts, rng=row_rng(opts.seed, DEFAULT, j), bins=base.bins, progress=sub
+        )[0]
         done += refit[j]
         fit = {names[i]: round(float(x), 4) for i, x in zip(idx, e.weights, strict=True) if x >= 1e-4}
         fits.append(fit or None)

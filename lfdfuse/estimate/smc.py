@@ -39,6 +39,11 @@ class SMCParams:
     """Settings of the sampler (see the module docstring)."""
 
     particles: int = 384
+    #: a pass of discrete command-model rows holding at most ``discrete_few`` decisions in all
+    #: runs with ``discrete_factor`` × ``particles``: few decisions leave a broad, flat-topped
+    #: posterior (bins) whose mean settles slowly, and such a pass is cheap
+    discrete_factor: int = 4
+    discrete_few: int = 400
     ess_target: float = 0.5
     moves: int = 3  # Metropolis moves after each resampling
     final_moves: int = 6  # moves at β = 1 before a chain is frozen
