@@ -3,7 +3,7 @@
 Per fresh scan (the control tick): ``/scan`` (in the base frame, as ``import`` writes it),
 ``/pose`` and ``/tf`` (the latest odometry, frame ``odom``), ``/targets`` when the robot has a
 camera, the ``/lfd/*`` channels of ``execute`` (written by its own
-:class:`~lfdfuse.execute.run.LfdRecorder`), ``/cmd_vel`` (the command sent; in ``--shadow``
+:class:`~lfdfuse.execute.record.LfdRecorder`), ``/cmd_vel`` (the command sent; in ``--shadow``
 the robot's own) and ``/lfd/command`` (``lfdfuse.DriveCommand``: the network's command, sent
 or not, its latency and, in shadow, its heading error). Zero Twists of the watchdog and of the
 exit are on ``/cmd_vel`` and ``/lfd/command`` too. Log times are the robot's stamps, kept
@@ -19,7 +19,7 @@ from typing import Any
 import orjson
 
 from lfdfuse.drive.core import DriveCore, Tick
-from lfdfuse.execute.run import LfdRecorder
+from lfdfuse.execute.record import LfdRecorder
 from lfdfuse.log import messages as msg
 from lfdfuse.log.stamps import stamp
 from lfdfuse.log.writer import LogWriter

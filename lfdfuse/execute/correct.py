@@ -3,7 +3,7 @@
 The network is execute's own :class:`~lfdfuse.network.driver.NetworkDriver`, handed to the
 teleop session as its ``network`` command source: the session asks it every period and decides
 who drives (:class:`~lfdfuse.sources.teleop.session.TeleopSession`), the one loop of
-:mod:`lfdfuse.sim.loop` runs, and :class:`~lfdfuse.execute.run.LfdRecorder` logs the network's
+:mod:`lfdfuse.sim.loop` runs, and :class:`~lfdfuse.execute.record.LfdRecorder` logs the network's
 proposal (``/lfd/step``, ``/lfd/fused``, help on ``/lfd/network``) every tick, also while the
 person drives. Until the first input the run is tick for tick ``execute``'s of the same table,
 seed and start; ``/lfd/authority`` tells the learner's ticks from the teacher's.
@@ -17,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from lfdfuse.execute.report import build_report
-from lfdfuse.execute.run import LfdRecorder, goal_list
+from lfdfuse.execute.record import LfdRecorder
+from lfdfuse.execute.report import network_report
 from lfdfuse.log.writer import LogWriter
 from lfdfuse.network.driver import NetworkDriver
 from lfdfuse.network.table import FusionTable
@@ -79,14 +79,7 @@ def correct(
         completed=driver.done,
         reached=tuple((name, k * dt) for name, k in driver.reached),
     )
-    report = build_report(
-        task,
-        goals=goal_list(driver.table),
-        side=driver.side,
-        unseen_ticks=driver.unseen_ticks,
-        reflex_ticks=driver.reflex_ticks,
-        help=driver.help,
-    )
+    report = network_report(task, driver)
     report["correction"] = {
         "person_ticks": session.person_ticks,
         "network_ticks": session.network_ticks,

@@ -10,7 +10,8 @@ from typing import Any
 import numpy as np
 
 from lfdfuse.files import write_text_atomic
-from lfdfuse.network.driver import HelpRequest
+from lfdfuse.network.driver import HelpRequest, NetworkDriver
+from lfdfuse.network.table import FusionTable, leaf_steps
 from lfdfuse.sim.loop import RunSummary
 
 
@@ -68,6 +69,23 @@ def build_report(
         "reflex_fraction": round(reflex_ticks / max(active_ticks, 1), 4),
         "help": [{"t_s": round(h.t_s, 2), "step": h.step, "bac": h.bac, "why": h.why} for h in help],
     }
+
+
+def goal_list(table: FusionTable) -> list[tuple[str, str]]:
+    """The table's goal steps ``(step name, target)`` in the order of its goal segments."""
+    return [(s.name, s.goal) for s in leaf_steps(table) if s.goal is not None]
+
+
+def network_report(summary: RunSummary, driver: NetworkDriver) -> dict[str, Any]:
+    """:func:`build_report` of a run the network ``driver`` drove (execute, ``teleop --table``)."""
+    return build_report(
+        summary,
+        goals=goal_list(driver.table),
+        side=driver.side,
+        unseen_ticks=driver.unseen_ticks,
+        reflex_ticks=driver.reflex_ticks,
+        help=driver.help,
+    )
 
 
 def write_report(report: dict[str, Any], path: str | Path) -> None:

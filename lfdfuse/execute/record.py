@@ -1,0 +1,89 @@
+"""The network's side of an execute run on the ``/lfd/*`` channels of DESIGN §5.
+
+:class:`LfdRecorder` is a sink of the simulation loop (or of ``drive``'s and ``teleop --table``'s
+recorders): every tick the behaviour outputs, BAC, active step and fused vector the network
+decided on, an overlay of one arrow per weighted behaviour, and on ``/lfd/network`` each request
+for help (a BAC the table has no row for, or an unidentifiable row).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from lfdfuse.log import lfd
+from lfdfuse.log import messages as msg
+from lfdfuse.log.writer import LogWriter
+from lfdfuse.network.driver import NetworkDriver
+from lfdfuse.network.runtime import step_name_of
+from lfdfuse.sim.simulator import Observation
+
+PALETTE = [
+    (0.9, 0.3, 0.2),
+    (0.2, 0.6, 0.9),
+    (0.3, 0.8, 0.3),
+    (0.9, 0.7, 0.1),
+    (0.7, 0.3, 0.9),
+    (0.1, 0.8, 0.8),
+    (0.9, 0.4, 0.7),
+    (0.6, 0.5, 0.3),
+    (0.5, 0.5, 0.9),
+    (0.8, 0.8, 0.5),
+    (0.4, 0.7, 0.5),
+    (0.9, 0.6, 0.4),
+    (0.6, 0.6, 0.6),
+]
+
+
+class LfdRecorder:
+    """Logs the network's decision of every tick on the ``/lfd/*`` channels of DESIGN §5."""
+
+    def __init__(self, log: LogWriter, driver: NetworkDriver) -> None:
+        self.log = log
+        self.driver = driver
+        for topic, schema in lfd.EXECUTE_TOPICS.items():
+            log.add_topic(topic, schema)
+
+    def record(self, obs: Observation, command: tuple[float, float]) -> None:
+        dec, out, t_ns = self.driver.last, self.driver.last_outputs, obs.t_ns
+        if dec is None or out is None:
+            return
+        names = self.driver.table.behaviors
+        vec = np.round(out.vectors[0], 6)
+        app = out.applicable[0]
+        log = self.log
+        log.write_raw("/lfd/behaviors", t_ns, lfd.encode_behaviors(t_ns, names, vec, app, out.goal_met[0]))
+        log.write_raw(
+            "/lfd/bac", t_ns, lfd.encode_bac(t_ns, dec.bac, [n for j, n in enumerate(names) if app[j]])
+        )
+        log.write_raw(
+            "/lfd/step",
+            t_ns,
+            lfd.encode_step(
+                t_ns,
+                step=step_name_of(dec.path, self.driver.table) if dec.step is not None else None,
+                goal=dec.step.goal if dec.step is not None else None,
+                bac=dec.bac,
+                default_weights=dec.unseen,
+                achieved=[g for g, _ in self.driver.reached],
+            ),
+        )
+        log.write_raw(
+            "/lfd/fused", t_ns, lfd.encode_fused(t_ns, float(dec.fused[0]), float(dec.fused[1]), dec.weights)
+        )
+        arrows = [
+            msg.Arrow(
+                dec.weights[n] * float(vec[j, 0]),
+                dec.weights[n] * float(vec[j, 1]),
+                PALETTE[j % len(PALETTE)],
+                1.5,
+            )
+            for j, n in enumerate(names)
+            if app[j] and n in dec.weights
+        ]
+        arrows.append(msg.Arrow(float(dec.fused[0]), float(dec.fused[1]), (1.0, 1.0, 1.0), 1.5))
+        log.write("/lfd/overlay", t_ns, msg.arrow_scene(t_ns, "fusion", arrows))
+        ask = self.driver.help_now
+        if ask is not None:
+            log.write_raw(
+                "/lfd/network", t_ns, lfd.encode_help(t_ns, step=ask.step, bac=ask.bac, why=ask.why)
+            )
