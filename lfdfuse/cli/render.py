@@ -159,8 +159,12 @@ def print_changes(table: FusionTable) -> None:
     rows = changed_rows(table)
     if not isinstance(sources, list) or len(sources) < 2:
         return
+    modes = table.estimated_by.get("source_commands")
+    named = [str(s) for s in sources]
+    if isinstance(modes, list) and len(modes) == len(sources):  # each read by its own command model
+        named = [f"{s} {m}" for s, m in zip(named, modes, strict=True)]
     console.print(
-        f"pooled {len(sources)} demos ({', '.join(str(s) for s in sources)}): {len(rows)} row(s) changed "
+        f"pooled {len(sources)} demos ({', '.join(named)}): {len(rows)} row(s) changed "
         f"by the demos after {sources[0]}; every other row is {sources[0]}'s alone"
     )
     for name, r in rows:

@@ -24,7 +24,15 @@ import numpy as np
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.baselines import arbitration_weights, nnls_weights
 from lfdfuse.estimate.identifiability import identifiable
-from lfdfuse.estimate.model import CommandBins, FusionModel, make_row, row_loglik
+from lfdfuse.estimate.model import (
+    CommandBins,
+    FusionModel,
+    Row,
+    has_decisions,
+    make_pooled_row,
+    make_row,
+    row_loglik,
+)
 from lfdfuse.estimate.paper import Likelihood as LikelihoodName
 from lfdfuse.estimate.paper import PFParams, normalise, run_filter
 from lfdfuse.estimate.smc import SMCParams, TemperedSMC
@@ -41,6 +49,9 @@ class Problem(NamedTuple):
     vectors: np.ndarray
     demo: np.ndarray
     bounds: np.ndarray | None = None
+    #: pooled demos that each keep their command model: per step its command set's size (0: a
+    #: continuous demo's step; see :func:`~lfdfuse.estimate.model.make_pooled_row`)
+    commands: np.ndarray | None = None
 
 
 class Method(StrEnum):
@@ -143,9 +154,9 @@ def _pf_rows(
     for b in range(0, len(todo), per_pass):
         batch = todo[b : b + per_pass]
         size = float(sum(problems[i].vectors.shape[0] for i in batch))
-        datas = [make_row(problems[i].vectors, problems[i].demo, bins, problems[i].bounds) for i in batch]
+        datas = [_row_data(problems[i], bins) for i in batch]
         params = opts.smc
-        if bins is not None and sum(d.steps for d in datas) <= params.discrete_few:
+        if any(has_decisions(d) for d in datas) and sum(d.steps for d in datas) <= params.discrete_few:
             params = replace(params, particles=params.particles * params.discrete_factor)
         smc = TemperedSMC(datas, trials=k, model=opts.model, params=params, rng=rng)
         for _ in smc:
@@ -178,6 +189,13 @@ def _pf_rows(
     return [r for r in out if r is not None]
 
 
+def _row_data(p: Problem, bins: CommandBins | None) -> Row:
+    """The likelihood's data of one problem: its own command models when pooled, else ``bins``'."""
+    if p.commands is not None and p.bounds is not None:
+        return make_pooled_row(p.vectors, p.demo, p.bounds, p.commands)
+    return make_row(p.vectors, p.demo, bins, p.bounds)
+
+
 def _single(k: int) -> RowEstimate:
     return RowEstimate(np.ones(1), np.zeros(1), np.zeros(1) if k > 1 else None, None)
 
@@ -199,7 +217,7 @@ def _paper_rows(
     ]
     total, done = sum(cost), 0.0
     tell(progress, 0.0, total)
-    for (vectors, demo, _), c in zip(problems, cost, strict=True):
+    for (vectors, demo, *_), c in zip(problems, cost, strict=True):
         if vectors.shape[1] == 1:
             out.append(_single(k))
             continue
@@ -226,7 +244,7 @@ def _fit_rows(fit: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> RowsFn:
         k = opts.trials
         total, done = float(sum(p.vectors.shape[0] for p in problems)), 0.0
         tell(progress, 0.0, total)
-        for vectors, demo, _ in problems:
+        for vectors, demo, *_ in problems:
             t, n, _ = vectors.shape
             if n == 1:
                 out.append(_single(k))

@@ -226,13 +226,14 @@ class CommandBins:
 @dataclass(frozen=True)
 class DiscreteRowData:
     """The decisions of one row: the behaviours' robot-frame components ``vx, vy (T, n)`` and the
-    observed command's bin ``lo, hi (T,)`` (rad, ``lo < hi``), out of ``commands`` commands."""
+    observed command's bin ``lo, hi (T,)`` (rad, ``lo < hi``), out of ``commands`` commands (per
+    step ``(T,)`` when pooled demos' command sets differ in size: the lapse is each one's)."""
 
     vx: np.ndarray
     vy: np.ndarray
     lo: np.ndarray
     hi: np.ndarray
-    commands: int
+    commands: int | np.ndarray
 
     @property
     def steps(self) -> int:
@@ -243,7 +244,30 @@ class DiscreteRowData:
         return int(self.vx.shape[1])
 
 
-Row = RowData | DiscreteRowData
+@dataclass(frozen=True)
+class MixedRowData:
+    """A pooled row whose demos were commanded both ways (a scripted demo and a person's
+    keyboard correction): the continuous demos' steps and the discrete demos' decisions, each
+    read by its own model with its own noise integrated out; the likelihood is their product."""
+
+    continuous: RowData
+    discrete: DiscreteRowData
+
+    @property
+    def steps(self) -> int:
+        return self.continuous.steps + self.discrete.steps
+
+    @property
+    def size(self) -> int:
+        return self.continuous.size
+
+
+Row = RowData | DiscreteRowData | MixedRowData
+
+
+def has_decisions(data: Row) -> bool:
+    """Whether the row observes discrete commands (all or some of its steps)."""
+    return not isinstance(data, RowData)
 
 
 def make_row(
@@ -267,6 +291,28 @@ def make_row(
         np.ascontiguousarray(bounds[:, 1]),
         bins.size,
     )
+
+
+def make_pooled_row(vectors: np.ndarray, demo: np.ndarray, bounds: np.ndarray, commands: np.ndarray) -> Row:
+    """The row data of pooled demos that each keep their command model: per step its command
+    set's size ``commands (T,)`` (0: a continuous demo's step) and, for a discrete step, the
+    heading interval it observes ``bounds (T, 2)`` (rad; ignored where ``commands`` is 0)."""
+    cont = commands == 0
+    disc = ~cont
+    sizes = commands[disc]
+    discrete = DiscreteRowData(
+        np.ascontiguousarray(vectors[disc][..., 0]),
+        np.ascontiguousarray(vectors[disc][..., 1]),
+        np.ascontiguousarray(bounds[disc, 0]),
+        np.ascontiguousarray(bounds[disc, 1]),
+        int(sizes[0]) if len(sizes) and (sizes == sizes[0]).all() else sizes.astype(np.float64),
+    )
+    if not cont.any():
+        return discrete
+    continuous = row_data(vectors[cont], demo[cont])
+    if not disc.any():
+        return continuous
+    return MixedRowData(continuous, discrete)
 
 
 def row_data(vectors: np.ndarray, demo: np.ndarray) -> RowData:
@@ -322,7 +368,11 @@ def discrete_log_marginal(data: DiscreteRowData, w: np.ndarray, model: FusionMod
     j = table.shape[1]
     ll = np.zeros((w.shape[0], j))
     block = max(16, BLOCK_ELEMENTS // max(1, w.shape[0] * j))
-    lapse = model.lapse / max(1, data.commands)
+    lapse: float | np.ndarray
+    if isinstance(data.commands, np.ndarray):  # pooled demos' command sets of several sizes
+        lapse = model.lapse / np.maximum(1.0, data.commands)
+    else:
+        lapse = model.lapse / max(1, data.commands)
     for c in range(0, data.steps, block):
         a = data.vx[c : c + block] @ wt
         b = data.vy[c : c + block] @ wt
@@ -337,7 +387,7 @@ def discrete_log_marginal(data: DiscreteRowData, w: np.ndarray, model: FusionMod
         # (steps, particles, nodes) in place: the largest temporaries of a discrete row
         np.clip(p, 0.0, 1.0, out=p)
         p *= 1.0 - model.lapse
-        p += lapse
+        p += lapse[c : c + block, None, None] if isinstance(lapse, np.ndarray) else lapse
         np.log(p, out=p)
         ll += p.sum(axis=0)
     return np.asarray(logsumexp(ll, axis=1) - math.log(j))
@@ -347,6 +397,9 @@ def row_loglik(data: Row, w: np.ndarray, model: FusionModel) -> np.ndarray:
     """``log p(data | w)`` with the noise integrated out, for weights ``w (P, n)`` → ``(P,)``."""
     if isinstance(data, DiscreteRowData):
         return discrete_log_marginal(data, w, model)
+    if isinstance(data, MixedRowData):
+        both = row_loglik(data.continuous, w, model) + discrete_log_marginal(data.discrete, w, model)
+        return np.asarray(both)
     return log_marginal(sum_cos(data, w), data.steps, model)
 
 

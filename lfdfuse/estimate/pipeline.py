@@ -24,7 +24,7 @@ import numpy as np
 
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.baselines import angle_errors
-from lfdfuse.estimate.commands import commands_of, decision_steps, observed_bounds
+from lfdfuse.estimate.commands import Commands, commands_of
 from lfdfuse.estimate.methods import (
     EstimateOptions,
     Method,
@@ -186,7 +186,7 @@ def estimate_segments(
     ]
     est = estimate_groups(problems, opts=opts, rng=rng, bins=cm.bins, progress=progress)
     rows: dict[int, list[FusionRow]] = {s.index: [] for s in run.segments}
-    for g, e, (vec, demo, _) in zip(live, est, problems, strict=False):
+    for g, e, (vec, demo, *_) in zip(live, est, problems, strict=False):
         err = float(np.degrees(angle_errors(vec, demo, e.weights).mean()))
         names = [run.names[i] for i in g.behaviors]
         rows[g.segment].append(
@@ -237,19 +237,6 @@ def run_rng(run: SegmentedRun, opts: EstimateOptions) -> np.random.Generator:
     return np.random.default_rng([opts.seed, len(run.t_ns)])
 
 
-def observed(
-    run: SegmentedRun, opts: EstimateOptions, bins: CommandBins | None
-) -> tuple[SegmentedRun, np.ndarray | None]:
-    """``run`` as the rows of a pooled estimate see it: with ``bins`` (a discrete first demo) only
-    its decisions are informative, and each step's observed heading interval ``(N, 2)`` in that
-    command set comes with it; without, the run as it is (every tick, the continuous model)."""
-    if bins is None:
-        return run, None
-    decided = decision_steps(run, recheck_s=opts.model.recheck_s)
-    narrowed = replace(run, informative=run.informative & decided)
-    return narrowed, observed_bounds(run, bins, nudge_s=opts.model.nudge_s)
-
-
 # ------------------------------------------------------------------------------ pooled demos
 
 
@@ -263,7 +250,8 @@ class PooledSteps:
     skipped: int  # rows with no informative step
     alignment: Alignment
     commands: str  # the first demo's command model (continuous | discrete)
-    bins: CommandBins | None  # its command set (discrete), used for the pooled rows too
+    bins: CommandBins | None  # its command set (discrete); every demo's rows observe their own
+    source_commands: tuple[str, ...]  # every demo's command model, in order
 
 
 def _row(
@@ -272,11 +260,11 @@ def _row(
     parts: Sequence[tuple[int, np.ndarray]],
     opts: EstimateOptions,
     bins: CommandBins | None,
-    bounds: Sequence[np.ndarray] | None,
+    models: Sequence[Commands],
     progress: Progress | None = None,
 ) -> tuple[RowEstimate, float]:
     """One row's estimate on ``parts`` (its own random stream) and its mean heading error (°)."""
-    p = problem_of(parts, runs, g.behaviors, bounds)
+    p = problem_of(parts, runs, g.behaviors, models, bins)
     rng = row_rng(opts.seed, ROW, g.step, g.bac)
     e = estimate_groups([p], opts=opts, rng=rng, bins=bins, progress=progress)[0]
     err = float(np.degrees(angle_errors(p.vectors, p.demo, e.weights).mean()))
@@ -330,14 +318,16 @@ def estimate_pooled(
     """
     check_options(opts)
     al = align(runs)
-    # what each demo's rows observe: for a discrete first demo, every demo's decisions and the
-    # heading intervals they observe in the first demo's command set (its rows come out so)
-    bins = commands_of(
-        runs[0], requested=opts.commands, recheck_s=opts.model.recheck_s, nudge_s=opts.model.nudge_s
-    ).bins
-    seen = [observed(run, opts, bins) for run in runs]
-    views = [v for v, _ in seen]
-    bounds = None if bins is None else [b for _, b in seen if b is not None]
+    # each demo keeps its command model: a discrete demo's rows see its decisions only, each
+    # observing the heading interval of its own command set
+    models = [
+        commands_of(run, requested=opts.commands, recheck_s=opts.model.recheck_s, nudge_s=opts.model.nudge_s)
+        for run in runs
+    ]
+    views = [
+        run if m.decisions is None else replace(run, informative=run.informative & m.decisions)
+        for run, m in zip(runs, models, strict=True)
+    ]
     groups = pooled_groups(views, al)
     live = [g for g in groups if g.samples]
     idx, dparts = _default_parts(views, al, opts)
@@ -373,7 +363,7 @@ def estimate_pooled(
             rows[g.step].append(own[(g.step, g.bac)])
             continue
         sub = part(progress, start=done, size=float(g.samples), total=total)
-        e, err = _row(g, views, [p for p in g.parts if len(p[1])], opts, base.bins, bounds, sub)
+        e, err = _row(g, views, [p for p in g.parts if len(p[1])], opts, base.bins, models, sub)
         app = [names[i] for i in g.behaviors]
         before = own.get((g.step, g.bac))
         rows[g.step].append(
@@ -405,7 +395,7 @@ def estimate_pooled(
         if same is not None:
             fits.append(fits[same])
             continue
-        prob = problem_of(parts, views, idx, bounds)
+        prob = problem_of(parts, views, idx, models, base.bins)
         sub = part(progress, start=done, size=float(refit[j]), total=total)
         e = estimate_groups(
             [prob], opts=opts, rng=row_rng(opts.seed, DEFAULT, j), bins=base.bins, progress=sub
@@ -419,7 +409,10 @@ def estimate_pooled(
         Step(nm, goal, tuple(rows[i]), None, fits[1 + i])
         for i, (nm, goal) in enumerate(zip(step_names(goals), goals, strict=True))
     )
-    return PooledSteps(steps, fits[0], len(groups), len(groups) - len(live), al, base.commands, base.bins)
+    modes = tuple(m.mode for m in models)
+    return PooledSteps(
+        steps, fits[0], len(groups), len(groups) - len(live), al, base.commands, base.bins, modes
+    )
 
 
 def _same_parts(a: list[tuple[int, np.ndarray]] | None, b: list[tuple[int, np.ndarray]] | None) -> bool:
@@ -462,6 +455,7 @@ def estimate_runs(
     )
     if len(runs) > 1:
         by["sources"] = list(names)
+        by["source_commands"] = list(est.source_commands)  # each demo's own command model
     table = FusionTable(
         runs[0].names,
         est.default_weights or default_weights_for(runs[0].names),

@@ -12,8 +12,10 @@ says which of its goal segments is which network step, and which of its steps a 
 * **Rows** (:func:`pooled_groups`): a row is a (step, BAC); its parts are, per demo that has it,
   the demo's informative steps there. A row's likelihood is the product over its parts: for the
   continuous heading model and for least squares that is one problem of the concatenated steps
-  (:func:`problem_of`); a per-demo command model (issue 19) keeps the parts apart, which is why
-  they are carried as parts.
+  (:func:`problem_of`). Each demo keeps its own command model (issue 19): a keyboard demo's
+  decisions observe the bins of its own command set, and a row pooling a scripted demo with a
+  person's keyboard correction reads each by its own model, each with its own noise
+  (:class:`~lfdfuse.estimate.model.MixedRowData`) — which is why the parts are carried apart.
 * **Random streams** (:func:`row_rng`): every row draws from its own stream keyed by the seed,
   its step and its BAC, so adding a demo that does not touch a row leaves it bit-identical.
 """
@@ -25,7 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lfdfuse.estimate.commands import Commands
 from lfdfuse.estimate.methods import Problem
+from lfdfuse.estimate.model import CommandBins
 from lfdfuse.segment.read import SegmentedRun
 
 #: the key of a row's stream: ``row_rng`` keys are ``(seed, ROW, step, bac)``, a default fit's
@@ -126,18 +130,33 @@ def problem_of(
     parts: Sequence[tuple[int, np.ndarray]],
     runs: Sequence[SegmentedRun],
     behaviors: Sequence[int],
-    bounds: Sequence[np.ndarray] | None = None,
+    models: Sequence[Commands] | None = None,
+    bins: CommandBins | None = None,
 ) -> Problem:
     """One problem of the parts' steps, concatenated in demo order (one demo's part: exactly its
-    steps, as a single-demo estimate has them); with ``bounds`` (per demo, each step's observed
-    heading interval ``(N, 2)``: the discrete command model) the parts' intervals too."""
+    steps, as a single-demo estimate has them). ``models``: each demo's command model, ``bins``
+    the command set the rows are estimated with (the first demo's). Where every part's demo has
+    that model, the problem is read by it (with the discrete model's observed intervals);
+    otherwise each step keeps its own demo's model (``Problem.commands``)."""
     cols = list(behaviors)
-    vec = [runs[d].vectors[s][:, cols, :] for d, s in parts]
-    dem = [runs[d].demo[s] for d, s in parts]
-    bnd = None if bounds is None else [bounds[d][s] for d, s in parts]
-    if len(vec) == 1:
-        return Problem(vec[0], dem[0], None if bnd is None else bnd[0])
-    return Problem(np.concatenate(vec), np.concatenate(dem), None if bnd is None else np.concatenate(bnd))
+    vec = np.concatenate([runs[d].vectors[s][:, cols, :] for d, s in parts])
+    dem = np.concatenate([runs[d].demo[s] for d, s in parts])
+    if models is None or (bins is None and all(models[d].bins is None for d, _ in parts)):
+        return Problem(vec, dem)
+    own = [models[d] for d, _ in parts]
+    n = len(dem)
+    bounds = np.zeros((n, 2))
+    k = 0
+    for (_, s), m in zip(parts, own, strict=True):
+        if m.bounds is not None:
+            bounds[k : k + len(s)] = m.bounds[s]
+        k += len(s)
+    if all(m.bins == bins for m in own):
+        return Problem(vec, dem, bounds)
+    sizes = np.concatenate(
+        [np.full(len(s), 0 if m.bins is None else m.bins.size) for (_, s), m in zip(parts, own, strict=True)]
+    )
+    return Problem(vec, dem, bounds, sizes)
 
 
 def same_behaviors(runs: Sequence[SegmentedRun], names: Sequence[str]) -> str | None:

@@ -8,9 +8,19 @@ from pathlib import Path
 import numpy as np
 import orjson
 import pytest
+from scipy.special import i0e
 
 from lfdfuse.estimate.commands import commands_of, decision_steps
-from lfdfuse.estimate.model import CommandBins, FusionModel, discrete_log_marginal, make_row
+from lfdfuse.estimate.model import (
+    CommandBins,
+    DiscreteRowData,
+    FusionModel,
+    MixedRowData,
+    discrete_log_marginal,
+    make_pooled_row,
+    make_row,
+    row_loglik,
+)
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
 from lfdfuse.estimate.smc import SMCParams, TemperedSMC
 from lfdfuse.log.reader import file_info, iter_attachments, iter_raw
@@ -278,3 +288,110 @@ def test_a_situation_met_only_between_decisions_is_no_row() -> None:
     table, groups, skipped = estimate_run(run, opts=EstimateOptions(seed=0))
     assert (groups, skipped) == (2, 1)
     assert [r.bac for r in table.network.steps[0].fusion] == [3]
+
+
+# ------------------------------------------------------------------------------ pooled demos, each its own model
+
+
+def brute_force_sizes(
+    row_vectors: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    sizes: np.ndarray,
+    w: np.ndarray,
+    model: FusionModel,
+) -> float:
+    """As :func:`brute_force`, each step's lapse spread over its own command set of ``sizes[t]``."""
+    x = np.linspace(-math.pi, math.pi, 100_001)
+    f = np.einsum("tnc,n->tc", row_vectors, w)
+    phi = np.arctan2(f[:, 1], f[:, 0])
+    lls = []
+    for k in model.discrete_kappas:
+        dens = np.exp(k * (np.cos(x) - 1))
+        dens /= np.trapezoid(dens, x)
+        total = 0.0
+        for t in range(len(phi)):
+            h = np.remainder(phi[t] + x + math.pi, 2 * math.pi) - math.pi
+            p = np.trapezoid(dens * ((h >= lo[t]) & (h < hi[t])), x)
+            total += math.log((1 - model.lapse) * p + model.lapse / sizes[t])
+        lls.append(total)
+    a = np.array(lls)
+    return float(np.log(np.exp(a - a.max()).mean()) + a.max())
+
+
+def continuous_brute_force(
+    row_vectors: np.ndarray, demo: np.ndarray, w: np.ndarray, model: FusionModel
+) -> float:
+    """``log p(headings | w)`` of the continuous model: von Mises errors, κ averaged over its nodes."""
+    f = np.einsum("tnc,n->tc", row_vectors, w)
+    err = np.arctan2(f[:, 1], f[:, 0]) - np.arctan2(demo[:, 1], demo[:, 0])
+    # log I₀(κ) = log i0e(κ) + κ: finite at the sharpest nodes
+    lls = [
+        float(np.sum(k * (np.cos(err) - 1) - math.log(2 * math.pi) - math.log(i0e(k)))) for k in model.kappas
+    ]
+    a = np.array(lls)
+    return float(np.log(np.exp(a - a.max()).mean()) + a.max())
+
+
+def pooled_row_case(seed: int, sizes: list[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Random behaviour vectors, headings and observed bins of steps from demos whose command
+    sets have ``sizes`` (0: a continuous demo's step)."""
+    rng = np.random.default_rng(seed)
+    t, n = len(sizes), 3
+    v = rng.normal(size=(t, n, 2))
+    h = np.array(KEYS)[rng.integers(0, len(KEYS), t)] + np.where(
+        np.array(sizes) == 0, rng.normal(0, 0.3, t), 0.0
+    )
+    demo = np.stack([np.cos(h), np.sin(h)], -1)
+    bounds = CommandBins.from_headings(KEYS).bounds_of(h)
+    return v, demo, bounds, np.array(sizes)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_pooled_keyboards_keep_their_own_command_sets(seed: int) -> None:
+    """Two keyboard demos with command sets of 5 and 3 keys, pooled: each decision's lapse is
+    spread over its own demo's keys (numerical integration agrees)."""
+    v, demo, bounds, sizes = pooled_row_case(seed, [5, 5, 3, 3, 3, 5])
+    row = make_pooled_row(v, demo, bounds, sizes)
+    assert isinstance(row, DiscreteRowData)
+    w = np.random.default_rng(seed + 10).dirichlet(np.ones(3), size=3)
+    got = row_loglik(row, w, FusionModel())
+    want = [brute_force_sizes(v, bounds[:, 0], bounds[:, 1], sizes, wi, FusionModel()) for wi in w]
+    assert np.allclose(got, want, atol=2e-3), (got, want)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_row_pooling_a_scripted_demo_and_a_keyboard_reads_each_by_its_own_model(seed: int) -> None:
+    """A scripted demo's steps (continuous) and a person's keyboard decisions in one row: the
+    likelihood is the product of each read by its own model, each with its own noise."""
+    sizes = [0, 5, 0, 0, 5, 5, 0]
+    v, demo, bounds, arr = pooled_row_case(seed, sizes)
+    row = make_pooled_row(v, demo, bounds, arr)
+    assert isinstance(row, MixedRowData) and row.steps == len(sizes)
+    w = np.random.default_rng(seed + 20).dirichlet(np.ones(3), size=3)
+    model = FusionModel()
+    cont, disc = arr == 0, arr > 0
+    want = [
+        continuous_brute_force(v[cont], demo[cont], wi, model)
+        + brute_force_sizes(v[disc], bounds[disc, 0], bounds[disc, 1], arr[disc], wi, model)
+        for wi in w
+    ]
+    assert np.allclose(row_loglik(row, w, model), want, atol=2e-3), (row_loglik(row, w, model), want)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_pooled_demos_of_one_command_model_are_read_as_one_demo(seed: int) -> None:
+    """Demos that share a command set pool into exactly the row one demo of all their steps gives
+    (bit for bit), and continuous demos into the continuous row."""
+    v, demo, bounds, sizes = pooled_row_case(seed, [5] * 6)
+    w = np.random.default_rng(seed).dirichlet(np.ones(3), size=4)
+    same = make_row(v, demo, CommandBins.from_headings(KEYS), bounds)
+    assert np.array_equal(
+        row_loglik(make_pooled_row(v, demo, bounds, sizes), w, FusionModel()),
+        row_loglik(same, w, FusionModel()),
+    )
+    zeros = np.zeros(6, dtype=np.int64)
+    assert np.array_equal(
+        row_loglik(make_pooled_row(v, demo, bounds, zeros), w, FusionModel()),
+        row_loglik(make_row(v, demo), w, FusionModel()),
+    )

@@ -232,3 +232,36 @@ def test_three_demos_pooled_predict_a_fourth_better_than_any_one(tmp_path: Path)
     ]
     print(f"std pooled / single on the rows the pool grew: {sorted(round(x, 2) for x in ratios)}")
     assert len(ratios) >= 3 and float(np.median(ratios)) < 0.8
+
+
+def test_each_demo_keeps_its_own_command_model(tmp_path: Path) -> None:
+    """A scripted demo (continuous) pooled with a person's keyboard demo (discrete): each is read
+    by its own model, whichever comes first — the provenance lists both, and a row both demos
+    pool is the same estimate in either order (up to the sampler: the same likelihood)."""
+    world = load_world("tee")
+    segs = [
+        demonstrate(
+            (Leg(None, "keep-left"),),
+            world=world,
+            folder=tmp_path,
+            name=name,
+            duration_s=30.0,
+            seed=seed,
+            start=(1.0, 9.0, 0.0),
+            behaviors=BEHAVIORS,
+            keys_period_s=keys,
+        ).segmented
+        for name, seed, keys in [("scripted", 1, None), ("keys", 2, 0.8)]
+    ]
+    one, two = learn(segs).table, learn(segs[::-1]).table
+    assert one.estimated_by["source_commands"] == ["continuous", "discrete"]
+    assert two.estimated_by["source_commands"] == ["discrete", "continuous"]
+    a, b = rows_of(one), rows_of(two)
+    both = [k for k in a if k in b and (a[k].samples_added or 0) > 0 and (b[k].samples_added or 0) > 0]
+    assert both
+    for k in both:
+        gap = max(abs(a[k].weights[n] - b[k].weights[n]) for n in a[k].weights)
+        assert gap < 0.1, (k, a[k].weights, b[k].weights)
+    res = runner.invoke(app, ["estimate", str(segs[0]), str(segs[1]), "-o", str(tmp_path / "t.yaml")])
+    assert res.exit_code == 0, res.output
+    assert "scripted.seg.mcap continuous, keys.seg.mcap discrete" in res.output
