@@ -111,8 +111,11 @@ def commands_of(
     requested: str = "auto",
     recheck_s: float | None = 1.0,
     nudge_s: float | None = 1.0,
+    command_set: CommandBins | None = None,
 ) -> Commands:
-    """The command model of ``run``: ``requested``, else what segment recorded, else detected."""
+    """The command model of ``run``: ``requested``, else what segment recorded, else detected.
+    A discrete model's command set is ``command_set`` when given (the keyboard of a longer demo
+    this run is part of), else the run's own (:func:`bins_of`)."""
     if requested not in COMMAND_MODES:
         raise ConfigError(f"--commands must be one of {', '.join(COMMAND_MODES)}, got {requested!r}")
     mode = requested
@@ -123,7 +126,7 @@ def commands_of(
         mode = "discrete" if distinct <= FEW_COMMANDS else "continuous"
     if mode == "continuous":
         return Commands("continuous")
-    bins = bins_of(run)
+    bins = bins_of(run) if command_set is None else command_set
     return Commands(
         "discrete",
         bins,

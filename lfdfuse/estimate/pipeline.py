@@ -148,13 +148,21 @@ def estimate_segments(
     rng: np.random.Generator,
     table_default: bool = True,
     progress: Progress | None = None,
+    command_set: CommandBins | None = None,
 ) -> SegmentSteps:
     """Estimate every group of ``run.segments`` and each segment's default fit (and the table's,
     with ``table_default``) in one pass of the method. A discrete command model (a person at a
     keyboard) observes each decision once, not each tick it was held (DESIGN §6). ``progress``
-    is told how far the pass is, many times over a long one."""
+    is told how far the pass is, many times over a long one. ``command_set``: the discrete
+    model's command set, when not the run's own (:func:`~lfdfuse.estimate.commands.commands_of`)."""
     check_options(opts)
-    cm = commands_of(run, requested=opts.commands, recheck_s=opts.model.recheck_s, nudge_s=opts.model.nudge_s)
+    cm = commands_of(
+        run,
+        requested=opts.commands,
+        recheck_s=opts.model.recheck_s,
+        nudge_s=opts.model.nudge_s,
+        command_set=command_set,
+    )
     if cm.decisions is not None:  # discrete: one observation per decision, not per tick
         run = replace(run, informative=run.informative & cm.decisions)
     bounds = cm.bounds
@@ -307,6 +315,7 @@ def estimate_pooled(
     *,
     opts: EstimateOptions,
     progress: Progress | None = None,
+    command_set: CommandBins | None = None,
 ) -> PooledSteps:
     """Estimate the rows of one or more demos pooled (:mod:`lfdfuse.estimate.pool`).
 
@@ -314,15 +323,22 @@ def estimate_pooled(
     row or default fit the other demos add steps to is estimated again on the pooled steps, on its
     own random stream (:func:`~lfdfuse.estimate.pool.row_rng`), and carries ``samples_added`` and
     ``weights_before`` (the first demo's alone). So one demo gives the table it always gave, and
-    a row no further demo touched comes out bit-identical to the first demo's.
+    a row no further demo touched comes out bit-identical to the first demo's. ``command_set``:
+    the discrete model's command set, when not the first demo's own.
     """
     check_options(opts)
     al = align(runs)
     # each demo keeps its command model: a discrete demo's rows see its decisions only, each
-    # observing the heading interval of its own command set
+    # observing the heading interval of its own command set (``command_set``: the first demo's)
     models = [
-        commands_of(run, requested=opts.commands, recheck_s=opts.model.recheck_s, nudge_s=opts.model.nudge_s)
-        for run in runs
+        commands_of(
+            run,
+            requested=opts.commands,
+            recheck_s=opts.model.recheck_s,
+            nudge_s=opts.model.nudge_s,
+            command_set=command_set if d == 0 else None,
+        )
+        for d, run in enumerate(runs)
     ]
     views = [
         run if m.decisions is None else replace(run, informative=run.informative & m.decisions)
@@ -347,6 +363,7 @@ def estimate_pooled(
         opts=opts,
         rng=run_rng(runs[0], opts),
         progress=part(progress, start=0.0, size=first, total=total),
+        command_set=command_set,
     )
     # the first demo's rows and per-step defaults by pooled step
     own: dict[tuple[int, int], FusionRow] = {}
@@ -427,10 +444,12 @@ def estimate_runs(
     opts: EstimateOptions,
     names: Sequence[str],
     progress: Progress | None = None,
+    command_set: CommandBins | None = None,
 ) -> tuple[FusionTable, int, int]:
     """The fusion table of one or more segmented runs pooled (named ``names``, the first names the
     network); returns it with the row and skipped counts. Several demos must share their
-    behaviour set; the provenance lists them (``sources``)."""
+    behaviour set; the provenance lists them (``sources``). ``command_set``: the discrete
+    model's command set, when not the first demo's own (held-out evaluation's oracle)."""
     if not runs or len(runs) != len(names):
         raise ConfigError("estimate needs at least one demonstration")
     why = same_behaviors(runs, names)
@@ -445,7 +464,7 @@ def estimate_runs(
             " behaviour applicable (standing still and reversing carry no heading); drive the robot"
             " forward or turning while teaching"
         )
-    est = estimate_pooled(runs, opts=opts, progress=progress)
+    est = estimate_pooled(runs, opts=opts, progress=progress, command_set=command_set)
     by = provenance(
         opts,
         source=names[0],
@@ -471,6 +490,7 @@ def estimate_run(
     opts: EstimateOptions,
     name: str = "demo",
     progress: Progress | None = None,
+    command_set: CommandBins | None = None,
 ) -> tuple[FusionTable, int, int]:
     """The fusion table of a segmented run; returns it with the group and skipped counts."""
-    return estimate_runs([run], opts=opts, names=[name], progress=progress)
+    return estimate_runs([run], opts=opts, names=[name], progress=progress, command_set=command_set)

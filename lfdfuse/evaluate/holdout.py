@@ -9,7 +9,9 @@ heading is reported per method, with a bootstrap interval:
 * ``previous`` – the last demonstrated heading before the step (a persistence baseline: it
   needs the teacher's own command a tick ago, which no controller has when it drives alone);
 * ``oracle`` – the default estimator fitted on the held-out steps themselves: the floor for
-  any fusion of these primitives on those steps.
+  any fusion of these primitives on those steps. For a discrete log it reads the held-out
+  decisions in the command set of the whole demo (the person's keyboard), as the scores do: a
+  held-out part holding one command would otherwise be one bin, which every heading is in.
 
 For a demo of the discrete command model (a person at a keyboard, DESIGN §6) the held-out
 *decisions* (:func:`~lfdfuse.estimate.commands.decision_steps`) are scored too: a method
@@ -191,7 +193,11 @@ def evaluate(
     chosen: dict[str, np.ndarray] = {}
     for k, (name, part, eo) in enumerate(fits):
         sub = share(progress, start=float(k), size=1.0, total=len(fits) + 1.0)
-        table, _, _ = estimate_run(part, opts=eo, name=name, progress=sub)
+        # the oracle reads the held-out decisions in the person's command set (the whole demo's),
+        # not in the few commands the held-out part happens to hold: a part holding one command
+        # would have one bin, every decision in it, and the oracle would be the prior
+        keyboard = cm.bins if part is test else None
+        table, _, _ = estimate_run(part, opts=eo, name=name, progress=sub, command_set=keyboard)
         predictions[name] = predict(table, test, test_steps, segment_offset=offset if part is test else 0)
         if cm.bins is not None:
             at = predict(table, test, decided, segment_offset=offset if part is test else 0)

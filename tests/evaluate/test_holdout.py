@@ -111,3 +111,33 @@ def test_cli_writes_the_design_json(tmp_path: Path, sample_dir: Path) -> None:
         assert name in res.output
     bad = CliRunner().invoke(app, ["evaluate", str(seg), "--holdout", "1.5"])
     assert bad.exit_code == 1 and "error:" in bad.output
+
+
+def test_the_oracle_reads_held_out_decisions_in_the_persons_command_set() -> None:
+    """A keyboard demo whose held-out part holds one command (straight): the oracle is fitted in the
+    command set of the whole demo (straight's bin is ±45° between the turns in place), not in the
+    one command the part holds (one bin, the whole circle: every decision in it, the oracle the
+    prior). Behaviours point 0° and 120°: straight decisions say the first carries the weight."""
+    n = 400
+    h = np.zeros(n)
+    h[100:160] = -math.pi / 2  # a turn in place to the right while training; the rest straight
+    vec = np.zeros((n, 2, 2))
+    vec[:, 0] = [1.0, 0.0]
+    vec[:, 1] = [math.cos(2.1), math.sin(2.1)]
+    run = SegmentedRun(
+        names=("wander_left", "wander_right"),
+        t_ns=np.arange(n, dtype=np.int64) * 100_000_000,
+        vectors=vec,
+        applicable=np.ones((n, 2), bool),
+        goal_met=np.zeros((n, 2), bool),
+        demo=np.stack([np.cos(h), np.sin(h)], axis=1),
+        informative=np.ones(n, bool),
+        bac=np.full(n, 3, np.int64),
+        segment_of=np.zeros(n, np.int64),
+        segments=(GoalSegment(0, 0, n, None),),
+        metadata={"segment_commands": "discrete"},
+    )
+    ev = evaluate(run, holdout=0.3)
+    assert ev.commands == "discrete" and ev.held_out_headings == 1
+    # the prior's mean (equal weights) points 60° off straight; straight's bin holds it within 45°
+    assert ev.methods["oracle"].heading_error_deg < 30.0, ev.methods["oracle"]

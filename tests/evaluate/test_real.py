@@ -82,9 +82,12 @@ def test_the_learned_fusion_explains_a_person_at_a_keyboard(keyboard: dict[str, 
     to 'straight''s 9 and errs 27.9° on the 23 turning steps to straight's 38.2°; its heading error
     is 3.4° above the oracle's (target 3°, not met: 14.7° / 11.3°; it was 15.6° / 11.9°).
     Neato (lag 1.0 s, held-out part one forward command, then stops): 27.2° (it was 51.0°, the
-    fusion pointing backwards); the oracle, fitted on a held-out part with one command, is the
-    prior (12.1°), and no weights that put 18 of the 20 training decisions in their bins come within
-    20° of it on the held-out steps, so that target is out of reach of this split.
+    fusion pointing backwards); the oracle, reading the held-out forward decisions in the
+    keyboard's command set (forward's bin ±45°), is 4.3° (in the held-out part's own one-command
+    set it was the prior, 12.1°). No weights that put 18 of the 20 training decisions in their
+    bins come within 20° of it on the held-out steps: counting the 10 s turn in place once gives
+    14.2° but costs the TurtleBot 2.4°, and no validation inside the training part prefers that
+    (the note of issue 19), so that target is out of reach of this split.
     """
     tb = keyboard["turtlebot"].methods
     assert tb["fused"].command_accuracy is not None and tb["straight"].command_accuracy is not None
@@ -93,6 +96,8 @@ def test_the_learned_fusion_explains_a_person_at_a_keyboard(keyboard: dict[str, 
     assert tb["fused"].heading_error_deg <= tb["oracle"].heading_error_deg + 3.6
     ne = keyboard["neato"].methods
     assert keyboard["neato"].commands == "discrete" and keyboard["neato"].turning_steps == 0
+    # the oracle is fitted, not the prior (12.1°): forward's bin in the keyboard's command set
+    assert ne["oracle"].heading_error_deg < 8.0
     assert ne["fused"].heading_error_deg < 30.0
     assert ne["fused"].command_accuracy is not None and ne["straight"].command_accuracy is not None
     assert ne["fused"].command_accuracy > ne["straight"].command_accuracy
