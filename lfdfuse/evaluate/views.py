@@ -20,6 +20,7 @@ import shapely
 from lfdfuse.errors import LfdError, LogError
 from lfdfuse.files import parse_yaml
 from lfdfuse.log import lfd
+from lfdfuse.log.codec import MessageError
 from lfdfuse.log.reader import file_info, hold, iter_messages, read_run
 from lfdfuse.segment.read import read_segmented
 from lfdfuse.sim.robot import RobotParams
@@ -260,7 +261,7 @@ def _run(
                 if g not in seen:
                     seen.add(g)
                     achieved.append((t, g))
-    except lfd.MessageError as exc:
+    except MessageError as exc:
         raise LogError(f"{src}: a /lfd/step message at t={t} ns: {exc}") from exc
     if not step_t:
         raise LogError(f"{src}: /lfd/step has no messages")

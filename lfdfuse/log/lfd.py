@@ -5,7 +5,8 @@ Each channel is a frozen dataclass with its ``TOPIC`` and ``SCHEMA`` beside ``to
 by the caller) and ``from_dict`` / ``decode``. The decoders are the only readers of these
 channels: they check what the schema in ``schemas/`` states (required fields, no others, the
 JSON types, integers that are not booleans, non-negative stamps, bitmasks and indices, finite
-numbers) once, here, and raise :class:`MessageError` otherwise; a reader names the file, the
+numbers) once, with the checks of :mod:`lfdfuse.log.codec`, and raise its
+:class:`~lfdfuse.log.codec.MessageError` otherwise; a reader names the file, the
 channel and the time. What a schema cannot state (a known behaviour name, a BAC that agrees with
 the applicability bits) is for the reader to check.
 
@@ -18,12 +19,24 @@ import math
 import operator
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar, Self
+from typing import Any, ClassVar
 
 import numpy as np
-import orjson
 
-from lfdfuse.errors import LogError
+from lfdfuse.log.codec import (
+    Codec,
+    MessageError,
+    as_choice,
+    as_count,
+    as_flag,
+    as_name,
+    as_name_or_none,
+    as_names,
+    as_number,
+    check_fields,
+    keys_error,
+    timestamp_ns,
+)
 from lfdfuse.log.stamps import stamp
 
 #: channels that ``segment`` adds (a contract)
@@ -50,135 +63,6 @@ CORRECTION_TOPICS: dict[str, str] = {
 }
 
 
-class MessageError(LogError):
-    """A ``/lfd/*`` message that breaks its schema; the message says what, the reader says where."""
-
-
-# --- checks shared by the decoders ----------------------------------------------------------
-# orjson only ever yields dict, list, str, int, float, bool and None, and refuses NaN and
-# numbers that overflow a double, so exact ``type`` tests are both sufficient and fast.
-
-
-def _object(data: bytes) -> dict[str, Any]:
-    try:
-        msg = orjson.loads(data)
-    except orjson.JSONDecodeError as exc:
-        raise MessageError(f"not valid JSON ({str(exc)[:60]})") from None
-    if type(msg) is not dict:
-        raise MessageError("not a JSON object")
-    return msg
-
-
-def _fields(msg: dict[str, Any], keys: frozenset[str]) -> None:
-    """The schema's required fields and no others (``additionalProperties: false``).
-
-    Only the count is compared here (cheap, once per message); a decoder that then misses a
-    field calls :func:`_keys_error` on the ``KeyError``.
-    """
-    if len(msg) != len(keys):
-        raise _keys_error(msg, keys)
-
-
-def _keys_error(msg: dict[str, Any], keys: frozenset[str]) -> MessageError:
-    missing = sorted(keys - msg.keys())
-    extra = sorted(map(str, msg.keys() - keys))
-    if missing:
-        return MessageError(f"a field is missing: {missing[0]!r}")
-    if extra:
-        return MessageError(f"an unknown field: {extra[0]!r:.40}")
-    return MessageError("a field is missing")
-
-
-def _t_ns(msg: dict[str, Any]) -> int:
-    ts = msg["timestamp"]
-    sec = ts.get("sec") if type(ts) is dict else None
-    nsec = ts.get("nsec") if type(ts) is dict else None
-    if type(sec) is int and type(nsec) is int and sec >= 0 and 0 <= nsec < 1_000_000_000:
-        return sec * 1_000_000_000 + nsec
-    raise MessageError("timestamp needs integer sec >= 0 and nsec in [0, 1e9)")
-
-
-def _number(v: object, what: str) -> float:
-    if type(v) is float:
-        if not math.isfinite(v):  # only from a dict not parsed by orjson
-            raise MessageError(f"{what} is not finite")
-        return v
-    if type(v) is int:
-        try:
-            return float(v)  # always finite from orjson (its integers fit in 64 bits)
-        except OverflowError:  # e.g. 10**400 from another parser
-            raise MessageError(f"{what} is too large for a float") from None
-    raise MessageError(f"{what} is not a number")
-
-
-def _flag(v: object, what: str) -> bool:
-    if type(v) is not bool:
-        raise MessageError(f"{what} is not true or false")
-    return v
-
-
-def _count(v: object, what: str) -> int:
-    if type(v) is not int or v < 0:
-        raise MessageError(f"{what} is not a non-negative integer")
-    return v
-
-
-def _name(v: object, what: str) -> str:
-    if type(v) is not str:
-        raise MessageError(f"{what} is not a string")
-    return v
-
-
-def _name_or_none(v: object, what: str) -> str | None:
-    return None if v is None else _name(v, f"{what} (string or null)")
-
-
-def _names(v: object, what: str) -> tuple[str, ...]:
-    if type(v) is not list:
-        raise MessageError(f"{what} is not a list")
-    if not set(map(type, v)) <= {str}:
-        raise MessageError(f"an entry of {what} is not a string")
-    return tuple(v)
-
-
-class _Codec:
-    """What every ``/lfd/*`` message class shares: JSON bytes in and out, and the field check."""
-
-    TOPIC: ClassVar[str]
-    SCHEMA: ClassVar[str]
-    KEYS: ClassVar[frozenset[str]]
-
-    def to_dict(self) -> dict[str, Any]:
-        raise NotImplementedError
-
-    def encode(self) -> bytes:
-        """The message's JSON bytes, as written to the MCAP."""
-        return orjson.dumps(self.to_dict())
-
-    @classmethod
-    def _from_json(cls, msg: dict[str, Any]) -> Self:
-        raise NotImplementedError
-
-    @classmethod
-    def from_dict(cls, msg: dict[str, Any]) -> Self:
-        """The message of a parsed JSON object; :class:`MessageError` if it breaks the schema."""
-        if type(msg) is not dict:
-            raise MessageError("not a JSON object")
-        try:
-            return cls._from_json(msg)
-        except KeyError:
-            raise _keys_error(msg, cls.KEYS) from None
-
-    @classmethod
-    def decode(cls, data: bytes) -> Self:
-        """The message of its JSON bytes; :class:`MessageError` if they break the schema."""
-        msg = _object(data)
-        try:
-            return cls._from_json(msg)
-        except KeyError:
-            raise _keys_error(msg, cls.KEYS) from None
-
-
 # --- /lfd/behaviors -------------------------------------------------------------------------
 
 _BEHAVIOR_KEYS = frozenset({"name", "x", "y", "applicable", "goal_met"})
@@ -192,16 +76,16 @@ def _check_behavior(b: object) -> None:
     if type(b) is not dict:
         raise MessageError("a behaviour is not an object")
     if b.keys() != _BEHAVIOR_KEYS:
-        raise _keys_error(b, _BEHAVIOR_KEYS)
-    name = _name(b["name"], "a behaviour name")
-    _number(b["x"], f"x of {name!r:.40}")
-    _number(b["y"], f"y of {name!r:.40}")
-    _flag(b["applicable"], f"applicable of {name!r:.40}")
-    _flag(b["goal_met"], f"goal_met of {name!r:.40}")
+        raise keys_error(b, _BEHAVIOR_KEYS)
+    name = as_name(b["name"], "a behaviour name")
+    as_number(b["x"], f"x of {name!r:.40}")
+    as_number(b["y"], f"y of {name!r:.40}")
+    as_flag(b["applicable"], f"applicable of {name!r:.40}")
+    as_flag(b["goal_met"], f"goal_met of {name!r:.40}")
 
 
 @dataclass(frozen=True, eq=False)  # arrays: compare the fields
-class BehaviorRow(_Codec):
+class BehaviorRow(Codec):
     """``lfdfuse.BehaviorOutputs``: the behaviour outputs of one tick.
 
     ``vectors (K, 2)`` robot-frame (x, y), ``applicable (K,)`` and ``goal_met (K,)`` booleans.
@@ -238,8 +122,8 @@ class BehaviorRow(_Codec):
 
     @classmethod
     def _from_json(cls, msg: dict[str, Any]) -> BehaviorRow:
-        _fields(msg, cls.KEYS)
-        t_ns = _t_ns(msg)
+        check_fields(msg, cls.KEYS)
+        t_ns = timestamp_ns(msg)
         rows = msg["behaviors"]
         if type(rows) is not list:
             raise MessageError("behaviors is not a list")
@@ -281,7 +165,7 @@ def decode_behaviors(data: bytes) -> BehaviorRow:
 
 
 @dataclass(frozen=True)
-class DemoHeading(_Codec):
+class DemoHeading(Codec):
     """``lfdfuse.DemoHeading``: the demonstrated unit vector V_r (robot frame);
     ``informative`` False when the command carries no heading."""
 
@@ -309,13 +193,13 @@ class DemoHeading(_Codec):
 
     @classmethod
     def _from_json(cls, msg: dict[str, Any]) -> DemoHeading:
-        _fields(msg, cls.KEYS)
-        _number(msg["heading_rad"], "heading_rad")  # derived from x, y: checked, not kept
+        check_fields(msg, cls.KEYS)
+        as_number(msg["heading_rad"], "heading_rad")  # derived from x, y: checked, not kept
         return cls(
-            _t_ns(msg),
-            _number(msg["x"], "x"),
-            _number(msg["y"], "y"),
-            _flag(msg["informative"], "informative"),
+            timestamp_ns(msg),
+            as_number(msg["x"], "x"),
+            as_number(msg["y"], "y"),
+            as_flag(msg["informative"], "informative"),
         )
 
 
@@ -332,7 +216,7 @@ def decode_demo(data: bytes) -> DemoHeading:
 
 
 @dataclass(frozen=True)
-class Bac(_Codec):
+class Bac(Codec):
     """``lfdfuse.Bac``: the applicability bit mask (bit i: behaviour i applicable) and the names."""
 
     TOPIC: ClassVar[str] = "/lfd/bac"
@@ -348,8 +232,8 @@ class Bac(_Codec):
 
     @classmethod
     def _from_json(cls, msg: dict[str, Any]) -> Bac:
-        _fields(msg, cls.KEYS)
-        return cls(_t_ns(msg), _count(msg["bac"], "bac"), _names(msg["applicable"], "applicable"))
+        check_fields(msg, cls.KEYS)
+        return cls(timestamp_ns(msg), as_count(msg["bac"], "bac"), as_names(msg["applicable"], "applicable"))
 
 
 def encode_bac(t_ns: int, bac: int, applicable: Sequence[str]) -> bytes:
@@ -364,7 +248,7 @@ def decode_bac(data: bytes) -> Bac:
 
 
 @dataclass(frozen=True)
-class SegmentMark(_Codec):
+class SegmentMark(Codec):
     """``lfdfuse.GoalSegment``: the goal segment a tick belongs to, the behaviour whose goal ends
     it and that goal's target (both None for a trailing part that reaches no goal)."""
 
@@ -382,12 +266,12 @@ class SegmentMark(_Codec):
 
     @classmethod
     def _from_json(cls, msg: dict[str, Any]) -> SegmentMark:
-        _fields(msg, cls.KEYS)
+        check_fields(msg, cls.KEYS)
         return cls(
-            _t_ns(msg),
-            _count(msg["index"], "index"),
-            _name_or_none(msg["goal"], "goal"),
-            _name_or_none(msg["target"], "target"),
+            timestamp_ns(msg),
+            as_count(msg["index"], "index"),
+            as_name_or_none(msg["goal"], "goal"),
+            as_name_or_none(msg["target"], "target"),
         )
 
 
@@ -403,7 +287,7 @@ def decode_segment(data: bytes) -> SegmentMark:
 
 
 @dataclass(frozen=True)
-class NetworkStep(_Codec):
+class NetworkStep(Codec):
     """``lfdfuse.NetworkStep``: the active step of a tick (nested names joined by ``/``; None when
     the task is complete), its goal, the BAC, whether default weights were used (a BAC never
     seen in training), and the goals achieved so far, in order."""
@@ -433,14 +317,14 @@ class NetworkStep(_Codec):
 
     @classmethod
     def _from_json(cls, msg: dict[str, Any]) -> NetworkStep:
-        _fields(msg, cls.KEYS)
+        check_fields(msg, cls.KEYS)
         return cls(
-            _t_ns(msg),
-            _name_or_none(msg["step"], "step"),
-            _name_or_none(msg["goal"], "goal"),
-            _count(msg["bac"], "bac"),
-            _flag(msg["default_weights"], "default_weights"),
-            _names(msg["achieved"], "achieved"),
+            timestamp_ns(msg),
+            as_name_or_none(msg["step"], "step"),
+            as_name_or_none(msg["goal"], "goal"),
+            as_count(msg["bac"], "bac"),
+            as_flag(msg["default_weights"], "default_weights"),
+            as_names(msg["achieved"], "achieved"),
         )
 
 
@@ -451,7 +335,7 @@ def encode_step(
 
 
 @dataclass(frozen=True)
-class FusedVector(_Codec):
+class FusedVector(Codec):
     """``lfdfuse.FusedVector``: the fused robot-frame vector and the weights that made it
     (rounded to 1e-4 on the wire, so a decoded message holds the rounded weights)."""
 
@@ -474,14 +358,14 @@ class FusedVector(_Codec):
 
     @classmethod
     def _from_json(cls, msg: dict[str, Any]) -> FusedVector:
-        _fields(msg, cls.KEYS)
+        check_fields(msg, cls.KEYS)
         w = msg["weights"]
         if type(w) is not dict:
             raise MessageError("weights is not an object")
-        weights = {k: _number(v, f"the weight of {k!r:.40}") for k, v in w.items()}
+        weights = {k: as_number(v, f"the weight of {k!r:.40}") for k, v in w.items()}
         if any(v < 0 for v in weights.values()):
             raise MessageError("a weight is negative")
-        return cls(_t_ns(msg), _number(msg["x"], "x"), _number(msg["y"], "y"), weights)
+        return cls(timestamp_ns(msg), as_number(msg["x"], "x"), as_number(msg["y"], "y"), weights)
 
 
 def encode_fused(t_ns: int, x: float, y: float, weights: dict[str, float]) -> bytes:
@@ -501,7 +385,7 @@ NETWORK_EVENTS = ("help",)
 
 
 @dataclass(frozen=True)
-class NetworkEvent(_Codec):
+class NetworkEvent(Codec):
     """``lfdfuse.NetworkEvent``: something the network says about itself at one tick; for now only
     ``help``: it entered a BAC of ``step`` that its table cannot drive with confidence (``why``).
 
@@ -531,13 +415,13 @@ class NetworkEvent(_Codec):
 
     @classmethod
     def _from_json(cls, msg: dict[str, Any]) -> NetworkEvent:
-        _fields(msg, cls.KEYS)
+        check_fields(msg, cls.KEYS)
         return cls(
-            _t_ns(msg),
-            _choice(msg["event"], NETWORK_EVENTS, "event"),
-            _name(msg["step"], "step"),
-            _count(msg["bac"], "bac"),
-            _choice(msg["why"], HELP_REASONS, "why"),
+            timestamp_ns(msg),
+            as_choice(msg["event"], NETWORK_EVENTS, "event"),
+            as_name(msg["step"], "step"),
+            as_count(msg["bac"], "bac"),
+            as_choice(msg["why"], HELP_REASONS, "why"),
         )
 
 
@@ -555,7 +439,7 @@ AUTHORITIES = ("network", "person")
 
 
 @dataclass(frozen=True)
-class Authority(_Codec):
+class Authority(Codec):
     """``lfdfuse.Authority``: who drove this tick — ``network`` (a fusion table) or ``person`` —
     and through what (``keyboard``, ``script``, ``foxglove client 3``; empty when unknown).
 
@@ -581,9 +465,11 @@ class Authority(_Codec):
 
     @classmethod
     def _from_json(cls, msg: dict[str, Any]) -> Authority:
-        _fields(msg, cls.KEYS)
+        check_fields(msg, cls.KEYS)
         return cls(
-            _t_ns(msg), _choice(msg["authority"], AUTHORITIES, "authority"), _name(msg["source"], "source")
+            timestamp_ns(msg),
+            as_choice(msg["authority"], AUTHORITIES, "authority"),
+            as_name(msg["source"], "source"),
         )
 
 
@@ -595,14 +481,8 @@ def decode_authority(data: bytes) -> Authority:
     return Authority.decode(data)
 
 
-def _choice(v: object, allowed: tuple[str, ...], what: str) -> str:
-    if type(v) is not str or v not in allowed:
-        raise MessageError(f"{what} is not one of {', '.join(allowed)}")
-    return v
-
-
 #: every ``/lfd/*`` message class, by topic
-CODECS: dict[str, type[_Codec]] = {
+CODECS: dict[str, type[Codec]] = {
     c.TOPIC: c
     for c in (BehaviorRow, DemoHeading, Bac, SegmentMark, NetworkStep, FusedVector, NetworkEvent, Authority)
 }

@@ -12,6 +12,7 @@ import numpy as np
 from lfdfuse.behaviors.primitives import ATTRACT, BASE_BEHAVIORS
 from lfdfuse.errors import LogError
 from lfdfuse.log import lfd
+from lfdfuse.log.codec import MessageError
 from lfdfuse.log.messages import PROVENANCE
 from lfdfuse.log.reader import (
     RUN_TOPICS,
@@ -125,7 +126,7 @@ class _SegmentedBuilder:
         check_log_time(self.path, topic, t)
         try:
             self._decode(topic, t, data)
-        except lfd.MessageError as exc:
+        except MessageError as exc:
             raise LogError(
                 f"{self.path}: a {topic} message at t={t} ns: {exc}; segment the demo again"
             ) from exc
@@ -148,15 +149,15 @@ class _SegmentedBuilder:
         elif topic == "/lfd/bac":
             b = lfd.Bac.decode(data).bac
             if b >> MAX_BEHAVIORS:
-                raise lfd.MessageError(f"bac has bits beyond the {MAX_BEHAVIORS} behaviours a log can hold")
+                raise MessageError(f"bac has bits beyond the {MAX_BEHAVIORS} behaviours a log can hold")
             self.bac.append(b)
         elif topic == "/lfd/segment":
             mark = lfd.SegmentMark.decode(data)
             if mark.index >= 2**31:
-                raise lfd.MessageError("the segment index is not below 2^31")
+                raise MessageError("the segment index is not below 2^31")
             seg = self.seg
             if mark.goal is not None and (not seg or mark.goal != seg[-1][1]) and not _is_behavior(mark.goal):
-                raise lfd.MessageError(f"the segment goal {mark.goal[:40]!r} is not a behaviour")
+                raise MessageError(f"the segment goal {mark.goal[:40]!r} is not a behaviour")
             seg.append((mark.index, mark.goal))
 
     def finish(self) -> SegmentedRun:
@@ -250,7 +251,7 @@ def network_ticks(path: str | Path, when_ns: np.ndarray) -> np.ndarray | None:
         for _topic, _s, at, data in iter_messages(path, topics=[AUTHORITY_TOPIC]):
             t.append(at)
             net.append(not lfd.decode_authority(data).person)
-    except lfd.MessageError as exc:
+    except MessageError as exc:
         raise LogError(f"{path}: a {AUTHORITY_TOPIC} message at t={at} ns: {exc}") from exc
     if not t:
         return None

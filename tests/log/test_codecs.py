@@ -16,6 +16,7 @@ from hypothesis import strategies as st
 
 from lfdfuse.log import lfd
 from lfdfuse.log import messages as msg
+from lfdfuse.log.codec import MessageError
 from lfdfuse.log.schemas import schema
 from lfdfuse.log.sensing import scan_geometry, stamp_of
 from lfdfuse.sim.sensors import Detection, ScanGeometry
@@ -168,7 +169,7 @@ def _verdicts(cls: type[Any], obj: object) -> tuple[bool, bool]:
     try:
         cls.decode(orjson.dumps(obj))
         by_decoder = True
-    except lfd.MessageError:
+    except MessageError:
         by_decoder = False
     return by_schema, by_decoder
 
@@ -219,29 +220,29 @@ def test_every_mutation_is_refused_by_the_decoder_iff_by_the_schema(sample: Any)
 def test_decoders_refuse_bytes_that_are_not_a_json_object() -> None:
     for data in (b"", b"\xff", b"[1, 2]", b"3", b"[" * 3000 + b"]" * 3000, b'{"x": 1e400}'):
         for cls in lfd.CODECS.values():
-            with pytest.raises(lfd.MessageError):
+            with pytest.raises(MessageError):
                 cls.decode(data)
 
 
 def test_from_dict_refuses_numbers_that_are_not_finite_doubles() -> None:
     good = orjson.loads(SAMPLES[0].encode())
-    with pytest.raises(lfd.MessageError, match="not finite"):
+    with pytest.raises(MessageError, match="not finite"):
         lfd.BehaviorRow.from_dict(_set(good, ("behaviors", 1, "y"), math.inf))
-    with pytest.raises(lfd.MessageError, match="not finite"):
+    with pytest.raises(MessageError, match="not finite"):
         lfd.DemoHeading.from_dict(_set(orjson.loads(SAMPLES[1].encode()), ("x",), math.nan))
-    with pytest.raises(lfd.MessageError, match="too large"):
+    with pytest.raises(MessageError, match="too large"):
         lfd.BehaviorRow.from_dict(_set(good, ("behaviors", 0, "x"), 10**400))
-    with pytest.raises(lfd.MessageError, match="too large"):
+    with pytest.raises(MessageError, match="too large"):
         lfd.DemoHeading.from_dict({**orjson.loads(SAMPLES[1].encode()), "y": 10**400})
 
 
 def test_a_decoder_error_names_the_field() -> None:
     good = orjson.loads(SAMPLES[0].encode())
-    with pytest.raises(lfd.MessageError, match="x of 'wander' is not a number"):
+    with pytest.raises(MessageError, match="x of 'wander' is not a number"):
         lfd.BehaviorRow.decode(orjson.dumps(_set(good, ("behaviors", 1, "x"), "0.5")))
-    with pytest.raises(lfd.MessageError, match="applicable of 'avoid' is not true or false"):
+    with pytest.raises(MessageError, match="applicable of 'avoid' is not true or false"):
         lfd.BehaviorRow.decode(orjson.dumps(_set(good, ("behaviors", 0, "applicable"), 1)))
-    with pytest.raises(lfd.MessageError, match="missing: 'bac'"):
+    with pytest.raises(MessageError, match="missing: 'bac'"):
         lfd.Bac.decode(b'{"timestamp": {"sec": 0, "nsec": 0}, "applicable": []}')
 
 
