@@ -193,7 +193,7 @@ def test_a_twist_stamped_robot_gets_twist_stamped(keep_left: Path) -> None:
         s = live.join(60)
         th.join(5)
     assert s.encoding == "cdr geometry_msgs/msg/TwistStamped" and robot.listener.bad == 0
-    # it drives (the straight-on path is ~1.2 m; on a loaded machine the watchdog's zero Twists,
+    # it drives (1.82 m on a quiet machine; on a loaded machine the watchdog's zero Twists,
     # sent when a scan's command took over 0.5 s of wall time, stop some of the lockstep ticks)
     assert len(robot.received) >= 45 and _path_m(robot.poses) > 0.5
     # zero Twists before the first scan (a new connection's, the watchdog's) carry our clock, as
