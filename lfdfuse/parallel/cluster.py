@@ -13,10 +13,10 @@ import uuid
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any, TypeVar
 
-from distributed import Client, LocalCluster, as_completed
+from distributed import Client, Future, LocalCluster, as_completed
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.parallel.jobs import Outcome, guarded
+from lfdfuse.parallel.jobs import Outcome, check_after, guarded_after
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -40,12 +40,27 @@ class DaskExecutor:
         threads = self.client.nthreads()
         return max(1, sum(int(n) for n in threads.values()))
 
-    def run(self, fn: Callable[[T], R], items: Sequence[T]) -> Iterator[Outcome[R]]:
+    def run(
+        self, fn: Callable[[T], R], items: Sequence[T], *, after: Sequence[Sequence[int]] | None = None
+    ) -> Iterator[Outcome[R]]:
+        """Every job submitted at once: a job waiting for others gets their futures (Dask starts it
+        when they are done), and the items' order is their priority (the first, the highest)."""
+        needs = check_after(after, len(items))
         tag = uuid.uuid4().hex[:8]  # unique keys: Dask would otherwise reuse a result of the same key
-        futures = [
-            self.client.submit(guarded, fn, i, item, key=f"lfdfuse-{tag}-{i}", pure=False)
-            for i, item in enumerate(items)
-        ]
+        futures: list[Future[Outcome[R]]] = []
+        for i, item in enumerate(items):
+            futures.append(
+                self.client.submit(
+                    guarded_after,
+                    fn,
+                    i,
+                    item,
+                    *(futures[j] for j in needs[i]),
+                    key=f"lfdfuse-{tag}-{i}",
+                    pure=False,
+                    priority=len(items) - i,
+                )
+            )
         try:
             for fut in as_completed(futures, loop=self.client.loop):
                 out: Outcome[R] = fut.result()
