@@ -16,7 +16,7 @@ from typing import Any, TypeVar
 from distributed import Client, Future, LocalCluster, as_completed
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.parallel.jobs import Outcome, check_after, guarded_after
+from lfdfuse.parallel.jobs import Outcome, check_after, guarded, guarded_after
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -43,28 +43,44 @@ class DaskExecutor:
     def run(
         self, fn: Callable[[T], R], items: Sequence[T], *, after: Sequence[Sequence[int]] | None = None
     ) -> Iterator[Outcome[R]]:
-        """Every job submitted at once: a job waiting for others gets their futures (Dask starts it
-        when they are done), and the items' order is their priority (the first, the highest)."""
+        """Independent jobs are submitted at once, the items' order their priority. When some wait
+        for others, a job goes out only when a slot is free: the first one, in the items' order,
+        whose jobs are done (list scheduling). Dask's own dependencies (futures as arguments) send
+        a job to a worker once ready, behind whatever that worker already holds: a relearning that
+        became ready went after another demo, a demo waited behind the relearning until stolen."""
         needs = check_after(after, len(items))
+        window = self.slots if any(needs) else len(items)
         tag = uuid.uuid4().hex[:8]  # unique keys: Dask would otherwise reuse a result of the same key
+        done: dict[int, Outcome[R]] = {}
+        todo = list(range(len(items)))
         futures: list[Future[Outcome[R]]] = []
-        for i, item in enumerate(items):
-            futures.append(
-                self.client.submit(
-                    guarded_after,
-                    fn,
-                    i,
-                    item,
-                    *(futures[j] for j in needs[i]),
-                    key=f"lfdfuse-{tag}-{i}",
-                    pure=False,
-                    priority=len(items) - i,
-                )
-            )
+        flying = as_completed(loop=self.client.loop)
         try:
-            for fut in as_completed(futures, loop=self.client.loop):
-                out: Outcome[R] = fut.result()
-                yield out
+            while todo or flying.count():
+                for i in [i for i in todo if all(j in done for j in needs[i])]:
+                    if flying.count() >= window:
+                        break
+                    todo.remove(i)
+                    prior = [done[j] for j in needs[i]]
+                    if not all(o.ok for o in prior):  # not run: one it waits for failed
+                        done[i] = guarded_after(fn, i, items[i], *prior)
+                        yield done[i]
+                        continue
+                    fut = self.client.submit(
+                        guarded,
+                        fn,
+                        i,
+                        items[i],
+                        key=f"lfdfuse-{tag}-{i}",
+                        pure=False,
+                        priority=len(items) - i,
+                    )
+                    futures.append(fut)
+                    flying.add(fut)
+                if flying.count():
+                    out: Outcome[R] = next(flying).result()
+                    done[out.index] = out
+                    yield out
         finally:
             self.client.cancel(futures)
 
