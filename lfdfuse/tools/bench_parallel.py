@@ -163,7 +163,7 @@ def run(quick: bool = False) -> list[dict[str, Any]]:
                 }
             )
             with open_executor() as serial:
-                # the paper's grid first (``make paper``): two waves of unequal cells
+                # the paper's grid first (``make paper``): unequal cells, some waiting for others
                 a_s, a_json, job_s, plan = _paper(Path(tmp) / "serial", serial, quick=quick)
                 b_s, b_json, _, _ = _paper(Path(tmp) / "workers", cluster, quick=quick)
                 paper = _paper_model(job_s, plan)
