@@ -13,6 +13,7 @@ import uuid
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any, TypeVar
 
+import dask
 from distributed import Client, Future, LocalCluster, as_completed
 
 from lfdfuse.errors import ConfigError
@@ -91,14 +92,21 @@ class DaskExecutor:
 
 
 def local_cluster(workers: int) -> DaskExecutor:
-    """A ``LocalCluster`` of ``workers`` processes of one thread each (no dashboard, quiet logs)."""
-    cluster = LocalCluster(
-        n_workers=workers,
-        threads_per_worker=1,
-        processes=True,
-        dashboard_address=None,
-        silence_logs=logging.ERROR,
-    )
+    """A ``LocalCluster`` of ``workers`` processes of one thread each (no dashboard, quiet logs).
+
+    Its workers keep glibc's own malloc tuning: Dask's nanny sets ``MALLOC_TRIM_THRESHOLD_`` (to
+    give memory back sooner), which also fixes the mmap threshold, so every mid-size numpy array
+    is mapped and unmapped anew: the estimator spent a third of its time more in page faults
+    (a 2-trial relearn: 0.62 s in this process, 0.93 s with the variable, 0.26 s of it system).
+    The jobs' peak memory does not change."""
+    with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
     return DaskExecutor(Client(cluster, set_as_default=False), cluster)
 
 
