@@ -13,10 +13,11 @@ import uuid
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any, TypeVar
 
-from distributed import Client, LocalCluster, as_completed
+import dask
+from distributed import Client, Future, LocalCluster, as_completed
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.parallel.jobs import Outcome, guarded
+from lfdfuse.parallel.jobs import Outcome, check_after, guarded, guarded_after
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -40,16 +41,47 @@ class DaskExecutor:
         threads = self.client.nthreads()
         return max(1, sum(int(n) for n in threads.values()))
 
-    def run(self, fn: Callable[[T], R], items: Sequence[T]) -> Iterator[Outcome[R]]:
+    def run(
+        self, fn: Callable[[T], R], items: Sequence[T], *, after: Sequence[Sequence[int]] | None = None
+    ) -> Iterator[Outcome[R]]:
+        """Independent jobs are submitted at once, the items' order their priority. When some wait
+        for others, a job goes out only when a slot is free: the first one, in the items' order,
+        whose jobs are done (list scheduling). Dask's own dependencies (futures as arguments) send
+        a job to a worker once ready, behind whatever that worker already holds: a relearning that
+        became ready went after another demo, a demo waited behind the relearning until stolen."""
+        needs = check_after(after, len(items))
+        window = self.slots if any(needs) else len(items)
         tag = uuid.uuid4().hex[:8]  # unique keys: Dask would otherwise reuse a result of the same key
-        futures = [
-            self.client.submit(guarded, fn, i, item, key=f"lfdfuse-{tag}-{i}", pure=False)
-            for i, item in enumerate(items)
-        ]
+        done: dict[int, Outcome[R]] = {}
+        todo = list(range(len(items)))
+        futures: list[Future[Outcome[R]]] = []
+        flying = as_completed(loop=self.client.loop)
         try:
-            for fut in as_completed(futures, loop=self.client.loop):
-                out: Outcome[R] = fut.result()
-                yield out
+            while todo or flying.count():
+                for i in [i for i in todo if all(j in done for j in needs[i])]:
+                    if flying.count() >= window:
+                        break
+                    todo.remove(i)
+                    prior = [done[j] for j in needs[i]]
+                    if not all(o.ok for o in prior):  # not run: one it waits for failed
+                        done[i] = guarded_after(fn, i, items[i], *prior)
+                        yield done[i]
+                        continue
+                    fut = self.client.submit(
+                        guarded,
+                        fn,
+                        i,
+                        items[i],
+                        key=f"lfdfuse-{tag}-{i}",
+                        pure=False,
+                        priority=len(items) - i,
+                    )
+                    futures.append(fut)
+                    flying.add(fut)
+                if flying.count():
+                    out: Outcome[R] = next(flying).result()
+                    done[out.index] = out
+                    yield out
         finally:
             self.client.cancel(futures)
 
@@ -60,14 +92,21 @@ class DaskExecutor:
 
 
 def local_cluster(workers: int) -> DaskExecutor:
-    """A ``LocalCluster`` of ``workers`` processes of one thread each (no dashboard, quiet logs)."""
-    cluster = LocalCluster(
-        n_workers=workers,
-        threads_per_worker=1,
-        processes=True,
-        dashboard_address=None,
-        silence_logs=logging.ERROR,
-    )
+    """A ``LocalCluster`` of ``workers`` processes of one thread each (no dashboard, quiet logs).
+
+    Its workers keep glibc's own malloc tuning: Dask's nanny sets ``MALLOC_TRIM_THRESHOLD_`` (to
+    give memory back sooner), which also fixes the mmap threshold, so every mid-size numpy array
+    is mapped and unmapped anew: the estimator spent a third of its time more in page faults
+    (a 2-trial relearn: 0.62 s in this process, 0.93 s with the variable, 0.26 s of it system).
+    The jobs' peak memory does not change."""
+    with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
     return DaskExecutor(Client(cluster, set_as_default=False), cluster)
 
 

@@ -5,14 +5,19 @@ their own inputs). An executor runs a batch of them and yields each :class:`Outc
 finishes, in any order; :class:`Batch` turns that stream into :class:`Event` s for a progress
 bar and collects the outcomes **by job index**, so the result never depends on which worker
 finished first.
+
+A job may wait for others (``after``: it reads what they wrote, a learned table say), and may
+say what it costs: :class:`Batch` hands the jobs to the executor critical path first
+(:func:`critical_path_order`), so a long chain starts at once instead of after the short jobs,
+and a job starts as soon as the jobs it waits for have finished (no barrier between stages).
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass
-from typing import Generic, Protocol, TypeVar
+from dataclasses import dataclass, replace
+from typing import Any, Generic, Protocol, TypeVar
 
 from lfdfuse.errors import LfdError
 
@@ -49,14 +54,56 @@ def guarded(fn: Callable[[T], R], index: int, item: T) -> Outcome[R]:
     return Outcome(index, value, None, time.perf_counter() - began)
 
 
+def guarded_after(fn: Callable[[T], R], index: int, item: T, *needs: Outcome[Any]) -> Outcome[R]:
+    """:func:`guarded`, once the jobs it waits for finished (their ``needs`` outcomes); if one of
+    them failed, this job fails too without running."""
+    if not all(o.ok for o in needs):
+        return Outcome(index, None, "not run: a job it waits for failed", 0.0)
+    return guarded(fn, index, item)
+
+
+def check_after(after: Sequence[Sequence[int]] | None, jobs: int) -> tuple[tuple[int, ...], ...]:
+    """``after`` as tuples, one per job (none: no job waits); a job waits only for earlier jobs."""
+    if after is None:
+        return ((),) * jobs
+    if len(after) != jobs:
+        raise ValueError("one 'after' entry per job")
+    out = tuple(tuple(a) for a in after)
+    for i, needs in enumerate(out):
+        if any(not 0 <= j < i for j in needs):
+            raise ValueError(f"job {i} may wait only for earlier jobs, not {needs}")
+    return out
+
+
+def critical_path_order(costs: Sequence[float], after: Sequence[Sequence[int]] | None = None) -> list[int]:
+    """The jobs in the order to start them: the longest chain to the end first.
+
+    A job's rank is its cost plus the most expensive chain of jobs waiting on it (its "bottom
+    level", the list-scheduling heuristic), ties by index. A job ranks at least as high as the
+    later jobs that wait for it (costs ≥ 0), so the order keeps every job after the ones it waits
+    for; with no ``after`` it is longest-first; with equal costs and no ``after``, the jobs' own order.
+    """
+    needs = check_after(after, len(costs))
+    if any(c < 0 for c in costs):
+        raise ValueError("a job's cost is at least 0")
+    rank = [float(c) for c in costs]
+    for i in reversed(range(len(costs))):  # the jobs waiting on i come after i
+        for j in needs[i]:
+            rank[j] = max(rank[j], costs[j] + rank[i])
+    return sorted(range(len(costs)), key=lambda i: (-rank[i], i))
+
+
 class Executor(Protocol):
-    """Runs independent jobs; ``slots`` is how many run at once."""
+    """Runs jobs; ``slots`` is how many run at once."""
 
     @property
     def slots(self) -> int: ...
 
-    def run(self, fn: Callable[[T], R], items: Sequence[T]) -> Iterator[Outcome[R]]:
-        """Every item's outcome, in the order the jobs finish."""
+    def run(
+        self, fn: Callable[[T], R], items: Sequence[T], *, after: Sequence[Sequence[int]] | None = None
+    ) -> Iterator[Outcome[R]]:
+        """Every item's outcome, in the order the jobs finish; the items start in their order as
+        far as the jobs they wait for let them (``after[i]``: earlier items, see :func:`guarded_after`)."""
         ...
 
 
@@ -67,9 +114,14 @@ class InProcess:
     def slots(self) -> int:
         return 1
 
-    def run(self, fn: Callable[[T], R], items: Sequence[T]) -> Iterator[Outcome[R]]:
+    def run(
+        self, fn: Callable[[T], R], items: Sequence[T], *, after: Sequence[Sequence[int]] | None = None
+    ) -> Iterator[Outcome[R]]:
+        needs = check_after(after, len(items))
+        outs: list[Outcome[R]] = []
         for i, item in enumerate(items):
-            yield guarded(fn, i, item)
+            outs.append(guarded_after(fn, i, item, *(outs[j] for j in needs[i])))
+            yield outs[-1]
 
 
 @dataclass(frozen=True)
@@ -93,7 +145,9 @@ class Batch(Generic[T, R, S]):
     """A batch of jobs on an executor: iterate for :class:`Event` s, then ask for the ``result``.
 
     ``reduce`` turns the outcomes, in job order, into the batch's result (a summary, a table).
-    Iterating twice does not rerun anything; ``result()`` runs what is left without events.
+    ``after[i]``: the earlier jobs job ``i`` waits for; ``costs``: what each job costs (any unit,
+    an estimate): the executor gets the jobs in :func:`critical_path_order` (as given without
+    costs). Iterating twice does not rerun anything; ``result()`` runs what is left without events.
     """
 
     def __init__(
@@ -104,9 +158,18 @@ class Batch(Generic[T, R, S]):
         executor: Executor,
         reduce: Callable[[tuple[Outcome[R], ...]], S],
         labels: Sequence[str] | None = None,
+        after: Sequence[Sequence[int]] | None = None,
+        costs: Sequence[float] | None = None,
     ) -> None:
         if labels is not None and len(labels) != len(items):
             raise ValueError("one label per job")
+        if costs is not None and len(costs) != len(items):
+            raise ValueError("one cost per job")
+        needs = check_after(after, len(items))
+        #: the order the executor gets the jobs in (its item k is job ``order[k]``)
+        self.order = tuple(critical_path_order(costs if costs is not None else [0.0] * len(items), needs))
+        at = {job: k for k, job in enumerate(self.order)}
+        self._after = tuple(tuple(sorted(at[j] for j in needs[job])) for job in self.order)
         self._fn, self._items, self._executor, self._reduce = fn, tuple(items), executor, reduce
         self.labels = (
             tuple(labels) if labels is not None else tuple(f"job {i + 1}" for i in range(len(items)))
@@ -127,7 +190,9 @@ class Batch(Generic[T, R, S]):
         slots = max(1, self._executor.slots)
         done = failed = 0
         yield Event(total, 0, 0, min(slots, total))
-        for out in self._executor.run(self._fn, self._items):
+        items = [self._items[job] for job in self.order]
+        for out in self._executor.run(self._fn, items, after=self._after):
+            out = replace(out, index=self.order[out.index])
             self._outcomes[out.index] = out
             done += out.ok
             failed += not out.ok

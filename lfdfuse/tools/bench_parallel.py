@@ -1,7 +1,10 @@
 """Many runs at once (issue 22): serial against a 2-worker Dask ``LocalCluster``, same run, same grid.
 
 First the paper's grid itself (``make paper``: every cell of the report, serial and on the
-workers, the report's numbers byte-identical). Then the cost model on a grid of equal jobs,
+workers, the report's numbers byte-identical), beside its cost model from the serial run's job
+times: ``model_s`` = total / workers, ``bound_s`` = max(that, the costliest chain of jobs that
+wait for each other: the three-goal demo, then its 30-trial relearn) and ``schedule_s``, the jobs
+list-scheduled in the order the batch hands them out. Then the cost model on a grid of equal jobs,
 the paper's Fig. 11 experiment at scale: the three-goal table (learned once from the
 shipped sample demo) driven from N perturbed starts (``execute --starts N``), N = 2, 4 and 8
 (2, 4, 6 in quick mode, runs of at most 40 s). For each size it measures the wall time in this process and on 2
@@ -24,21 +27,26 @@ import os
 import sys
 import tempfile
 import time
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
 from lfdfuse.evaluate.paper.compare import numbers, rows
-from lfdfuse.evaluate.paper.suite import PaperOptions, run_experiments
+from lfdfuse.evaluate.paper.suite import PaperOptions, Plan, plan_cells, run_experiments
 from lfdfuse.execute.starts import StartsOptions, run_starts
 from lfdfuse.network.table import write_table
-from lfdfuse.parallel import Executor, open_executor
+from lfdfuse.parallel import Executor, Outcome, open_executor
+from lfdfuse.parallel.jobs import check_after, critical_path_order
 from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.segment.read import read_segmented
 
 SAMPLE = Path(__file__).resolve().parents[2] / "sample_logs" / "three-goals-building.mcap"
 WORKERS = 2
 GOAL_RATIO = 0.65
+
+T = TypeVar("T")
+R = TypeVar("R")
 
 
 def _table(folder: Path) -> Path:
@@ -49,24 +57,89 @@ def _table(folder: Path) -> Path:
     return path
 
 
-def list_schedule_s(job_s: list[float], workers: int) -> float:
-    """The makespan of jobs handed, in order, to whichever of ``workers`` is free first (what Dask
-    does with equal jobs): the model's ``jobs × mean / workers`` plus the imbalance of unequal jobs."""
+def list_schedule_s(
+    job_s: Sequence[float], workers: int, after: Sequence[Sequence[int]] | None = None
+) -> float:
+    """The makespan of jobs handed, in order, to whichever of ``workers`` is free first, each
+    free worker taking the first job whose prerequisites (``after``: earlier jobs) are done — what
+    Dask does with jobs in priority order: the model's ``jobs × mean / workers`` plus the
+    imbalance of unequal jobs and the waits."""
+    needs = check_after(after, len(job_s))
+    end: dict[int, float] = {}
     free = [0.0] * workers
-    for t in job_s:
-        heapq.heappush(free, heapq.heappop(free) + t)
-    return max(free)
+    todo = list(range(len(job_s)))
+    while todo:
+        now = heapq.heappop(free)
+        job = next((i for i in todo if all(end.get(j, math.inf) <= now for j in needs[i])), None)
+        if job is None:  # nothing can start yet: free again when the next running job ends
+            heapq.heappush(free, min(t for t in end.values() if t > now))
+            continue
+        todo.remove(job)
+        end[job] = now + job_s[job]
+        heapq.heappush(free, end[job])
+    return max(end.values(), default=0.0)
 
 
-def _paper(folder: Path, executor: Executor, *, quick: bool) -> tuple[float, str, int]:
+def chain_s(job_s: Sequence[float], after: Sequence[Sequence[int]]) -> float:
+    """The costliest chain of jobs that wait for each other (no schedule is shorter)."""
+    needs = check_after(after, len(job_s))
+    ends: list[float] = []
+    for i, t in enumerate(job_s):
+        ends.append(t + max((ends[j] for j in needs[i]), default=0.0))
+    return max(ends, default=0.0)
+
+
+class _Timed:
+    """An executor that keeps each job's wall time (the outcome's, by the job: a frozen cell)."""
+
+    def __init__(self, inner: Executor) -> None:
+        self.inner = inner
+        self.seconds: dict[object, float] = {}
+
+    @property
+    def slots(self) -> int:
+        return self.inner.slots
+
+    def run(
+        self, fn: Callable[[T], R], items: Sequence[T], *, after: Sequence[Sequence[int]] | None = None
+    ) -> Iterator[Outcome[R]]:
+        for out in self.inner.run(fn, items, after=after):
+            self.seconds[items[out.index]] = out.seconds
+            yield out
+
+
+def _paper(folder: Path, executor: Executor, *, quick: bool) -> tuple[float, str, list[float], Plan]:
     """The report's grid (``make paper``; ``--quick`` in quick mode): wall time, report numbers as
-    JSON, number of cells."""
+    JSON, each cell's wall time (in the plan's order) and the plan."""
+    opts = PaperOptions(logs=folder / "logs", seed=1, quick=quick)
+    timed = _Timed(executor)
     t0 = time.perf_counter()
-    events = list(run_experiments(PaperOptions(logs=folder / "logs", seed=1, quick=quick), executor=executor))
+    events = list(run_experiments(opts, executor=timed))
     wall = time.perf_counter() - t0
     results = events[-1].results
     assert results is not None
-    return wall, json.dumps(numbers(results, tuple(rows(results)))), events[-1].total
+    plan = plan_cells(opts)
+    job_s = [timed.seconds[c] for c in plan.cells]
+    return wall, json.dumps(numbers(results, tuple(rows(results)))), job_s, plan
+
+
+def _paper_model(job_s: list[float], plan: Plan) -> dict[str, float]:
+    """The grid's cost model from measured job times: total / workers, the critical-path bound,
+    the list schedule in the batch's order (:func:`~lfdfuse.parallel.jobs.critical_path_order` of
+    the plan's estimated costs, as :class:`~lfdfuse.parallel.Batch` hands them out)."""
+    order = critical_path_order(plan.costs, plan.after)
+    at = {job: k for k, job in enumerate(order)}
+    after = [sorted(at[j] for j in plan.after[job]) for job in order]
+    total = sum(job_s)
+    model = total / WORKERS
+    return {
+        "total_job_s": round(total, 2),
+        "longest_job_s": round(max(job_s), 2),
+        "chain_s": round(chain_s(job_s, plan.after), 2),
+        "model_s": round(model, 2),
+        "bound_s": round(max(model, chain_s(job_s, plan.after)), 2),
+        "schedule_s": round(list_schedule_s([job_s[j] for j in order], WORKERS, after), 2),
+    }
 
 
 def run(quick: bool = False) -> list[dict[str, Any]]:
@@ -90,17 +163,21 @@ def run(quick: bool = False) -> list[dict[str, Any]]:
                 }
             )
             with open_executor() as serial:
-                # the paper's grid first (``make paper``): two waves of unequal cells
-                a_s, a_json, cells = _paper(Path(tmp) / "serial", serial, quick=quick)
-                b_s, b_json, _ = _paper(Path(tmp) / "workers", cluster, quick=quick)
+                # the paper's grid first (``make paper``): unequal cells, some waiting for others
+                a_s, a_json, job_s, plan = _paper(Path(tmp) / "serial", serial, quick=quick)
+                b_s, b_json, _, _ = _paper(Path(tmp) / "workers", cluster, quick=quick)
+                paper = _paper_model(job_s, plan)
                 rows.append(
                     {
                         "name": "paper grid" + (" (quick)" if quick else ""),
-                        "jobs": cells,
+                        "jobs": len(job_s),
                         "serial_s": round(a_s, 2),
                         "workers_s": round(b_s, 2),
                         "ratio": round(b_s / a_s, 3),
                         "goal_ratio": GOAL_RATIO,
+                        **paper,
+                        "model_ratio": round(paper["schedule_s"] / a_s, 3),
+                        "model_error": round(b_s / paper["schedule_s"] - 1.0, 3),
                         "identical": a_json == b_json,
                         "load_avg": round(os.getloadavg()[0], 1),
                     }

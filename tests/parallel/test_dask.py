@@ -10,9 +10,10 @@ import pytest
 from typer.testing import CliRunner
 
 from lfdfuse.cli.main import app
+from lfdfuse.errors import LfdError
 from lfdfuse.evaluate.batch import BASELINES, evaluate_logs
 from lfdfuse.execute.starts import StartsOptions, run_starts
-from lfdfuse.parallel import Executor, InProcess
+from lfdfuse.parallel import Batch, Executor, InProcess
 from lfdfuse.segment.pipeline import segment_file
 from tests.parallel.conftest import CORRIDOR_TABLE
 
@@ -100,3 +101,26 @@ def test_cli_workers_starts_a_local_cluster(tmp_path: Path) -> None:
     serial = tmp_path / "serial.json"
     assert CliRunner().invoke(app, [*args, "--report", str(serial)]).exit_code == 0
     assert rep.read_bytes() == serial.read_bytes()
+
+
+def _square_unless_three(x: int) -> int:
+    if x == 3:
+        raise LfdError("three is bad")
+    return x * x
+
+
+def test_jobs_that_wait_give_the_same_outcomes_on_two_workers(cluster: Executor) -> None:
+    """Jobs handed out as the jobs they wait for finish (2 in flight), a failure stopping what waits."""
+    items = list(range(8))
+    after = [(), (), (0,), (), (3,), (2, 4), (), (5,)]
+    costs = [1.0, 5.0, 2.0, 1.0, 1.0, 1.0, 3.0, 1.0]
+
+    def outcomes(ex: Executor) -> list[tuple[int | None, str | None]]:
+        batch = Batch(_square_unless_three, items, executor=ex, reduce=list, after=after, costs=costs)
+        events = list(batch)
+        assert events[-1].failed == 4 and events[-1].done == 4  # 3, and 4, 5, 7 waiting on it
+        return [(o.value, o.error) for o in batch.outcomes]
+
+    serial = outcomes(InProcess())
+    assert serial == outcomes(cluster)
+    assert [e for _, e in serial].count("not run: a job it waits for failed") == 3

@@ -14,7 +14,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lfdfuse.errors import ConfigError, LfdError
-from lfdfuse.parallel import Batch, InProcess, Outcome, check_executor, guarded, open_executor
+from lfdfuse.parallel import Batch, InProcess, Outcome, check_executor, open_executor
+from lfdfuse.parallel.jobs import check_after, critical_path_order, guarded_after
 from tests.conftest import ROOT
 
 T = TypeVar("T")
@@ -28,18 +29,28 @@ def _square_or_fail(x: int) -> int:
 
 
 class Shuffled:
-    """An executor that completes its jobs in a random order, two 'slots' wide."""
+    """An executor that completes its jobs in a random order (a job only after those it waits
+    for), two 'slots' wide; ``given``: the items in the order it got them."""
 
     def __init__(self, seed: int) -> None:
         self.rng = np.random.default_rng(seed)
+        self.given: list[object] = []
 
     @property
     def slots(self) -> int:
         return 2
 
-    def run(self, fn: Callable[[T], R], items: Sequence[T]) -> Iterator[Outcome[R]]:
-        for i in self.rng.permutation(len(items)):
-            yield guarded(fn, int(i), items[int(i)])
+    def run(
+        self, fn: Callable[[T], R], items: Sequence[T], *, after: Sequence[Sequence[int]] | None = None
+    ) -> Iterator[Outcome[R]]:
+        needs = check_after(after, len(items))
+        self.given = list(items)
+        outs: dict[int, Outcome[R]] = {}
+        while len(outs) < len(items):
+            ready = [i for i in range(len(items)) if i not in outs and all(j in outs for j in needs[i])]
+            i = int(self.rng.choice(ready))
+            outs[i] = guarded_after(fn, i, items[i], *(outs[j] for j in needs[i]))
+            yield outs[i]
 
 
 def _collect(outs: tuple[Outcome[int], ...]) -> list[int | str | None]:
@@ -71,6 +82,73 @@ def test_progress_adds_up_and_failures_carry_their_own_line(n: int, seed: int) -
     for ev in events[1:]:
         assert (ev.error is None) == (ev.index % 5 != 3)
     assert list(batch) == []  # iterating again reruns nothing
+
+
+@st.composite
+def _jobs(draw: st.DrawFn) -> tuple[list[float], list[tuple[int, ...]]]:
+    """Costs (≥ 0, ties likely) and, per job, some earlier jobs it waits for."""
+    n = draw(st.integers(0, 16))
+    costs = [float(c) for c in draw(st.lists(st.integers(0, 5), min_size=n, max_size=n))]
+    after = [tuple(sorted(draw(st.sets(st.integers(0, i - 1), max_size=2)))) if i else () for i in range(n)]
+    return costs, after
+
+
+def _chain_costs(costs: Sequence[float], after: Sequence[Sequence[int]]) -> list[float]:
+    """Each job's cost plus the most expensive chain of jobs waiting on it (every chain walked)."""
+
+    def chain(i: int) -> float:
+        waiting = [k for k in range(len(costs)) if i in after[k]]
+        return costs[i] + max((chain(k) for k in waiting), default=0.0)
+
+    return [chain(i) for i in range(len(costs))]
+
+
+@settings(max_examples=60, deadline=None)
+@given(_jobs())
+def test_the_order_starts_the_longest_chain_first_and_keeps_what_waits_after(
+    jobs: tuple[list[float], list[tuple[int, ...]]],
+) -> None:
+    costs, after = jobs
+    order = critical_path_order(costs, after)
+    assert sorted(order) == list(range(len(costs)))
+    at = {job: k for k, job in enumerate(order)}
+    assert all(at[j] < at[i] for i in range(len(costs)) for j in after[i])
+    chains = _chain_costs(costs, after)
+    ranks = [chains[i] for i in order]
+    assert ranks == sorted(ranks, reverse=True)
+    # independent jobs: longest first, ties (and equal costs) in their own order
+    assert critical_path_order(costs) == sorted(range(len(costs)), key=lambda i: (-costs[i], i))
+    assert critical_path_order([0.0] * len(costs), after) == list(range(len(costs)))  # free: as given
+
+
+@settings(max_examples=25, deadline=None)
+@given(_jobs(), st.integers(0, 2**32))
+def test_jobs_that_wait_give_the_same_results_in_any_order_and_a_failure_stops_what_waits(
+    jobs: tuple[list[float], list[tuple[int, ...]]], seed: int
+) -> None:
+    costs, after = jobs
+    items = list(range(len(costs)))
+    serial = Batch(_square_or_fail, items, executor=InProcess(), reduce=_collect, after=after)
+    shuffled_ex = Shuffled(seed)
+    shuffled = Batch(_square_or_fail, items, executor=shuffled_ex, reduce=_collect, after=after, costs=costs)
+    assert serial.result() == shuffled.result()
+    assert shuffled_ex.given == [items[i] for i in critical_path_order(costs, after)]
+    failed: set[int] = set()
+    for i in items:  # a job fails on its own (x % 5 == 3) or when one it waits for failed
+        if i % 5 == 3 or any(j in failed for j in after[i]):
+            failed.add(i)
+    for i, got in enumerate(serial.result()):
+        if i in failed and i % 5 != 3:
+            assert got == "not run: a job it waits for failed"
+        else:
+            assert (i in failed) == isinstance(got, str)
+
+
+def test_a_job_waits_only_for_earlier_jobs() -> None:
+    with pytest.raises(ValueError, match="earlier"):
+        Batch(_square_or_fail, [1, 2], executor=InProcess(), reduce=_collect, after=[(1,), ()])
+    with pytest.raises(ValueError, match="at least 0"):
+        critical_path_order([1.0, -1.0])
 
 
 def test_a_bug_is_not_swallowed() -> None:

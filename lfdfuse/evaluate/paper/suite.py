@@ -2,15 +2,17 @@
 
 :func:`run_experiments` is an iterator of :class:`ExperimentEvent` (the CLI turns them into a
 progress bar); its last event carries the :class:`~lfdfuse.evaluate.paper.records.PaperResults`.
-The experiments are cells (:mod:`~lfdfuse.evaluate.paper.cells`) in two waves — every
-demonstration learned, then every run of a learned network and the trials — handed to an
-executor (:mod:`lfdfuse.parallel`: in this process by default, Dask when asked). The logs and
-tables behind every number are written to the options' ``logs`` folder.
+The experiments are cells (:mod:`~lfdfuse.evaluate.paper.cells`) — every demonstration
+learned, every run of a learned network, the trials' relearning — handed to an executor
+(:mod:`lfdfuse.parallel`: in this process by default, Dask when asked) in one batch
+(:func:`plan_cells`): a run waits only for the table it drives, the relearning only for the
+three-goal demo, and the longest chain (that demo, then its 30-trial relearning) starts first.
+The logs and tables behind every number are written to the options' ``logs`` folder.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -112,13 +114,14 @@ def _learn_cells(opts: PaperOptions) -> list[LearnCell]:
     return cells
 
 
-def _run_cells(opts: PaperOptions, learned: dict[str, Learned]) -> list[RunCell]:
-    """Every run, in the order the runs are reported (the starts drawn here, from the seed)."""
+def _run_cells(opts: PaperOptions, tables: dict[str, Path]) -> list[RunCell]:
+    """Every run, in the order the runs are reported (the starts drawn here, from the seed);
+    ``tables``: the learned table of each learn cell's key."""
     logs, cells = opts.logs, []
     starts = ex.BUILDING_STARTS[:1] if opts.quick else ex.BUILDING_STARTS
     secs = 40.0 if opts.quick else 90.0
     for style in STYLES:
-        table = learned[style].table_path
+        table = tables[style]
         cells.append(RunCell(f"{style}/tee", logs, table, "tee", None, 2 * secs, f"{style}-run-tee", style))
         cells += [
             RunCell(
@@ -140,7 +143,7 @@ def _run_cells(opts: PaperOptions, learned: dict[str, Learned]) -> list[RunCell]
                 RunCell(
                     f"junction/{which}",
                     logs,
-                    learned[style].table_path,
+                    tables[style],
                     "building",
                     start,
                     40.0,
@@ -157,7 +160,7 @@ def _run_cells(opts: PaperOptions, learned: dict[str, Learned]) -> list[RunCell]
             RunCell(
                 "task",
                 logs,
-                learned["task"].table_path,
+                tables["task"],
                 "building",
                 start,
                 300.0,
@@ -174,7 +177,7 @@ def _run_cells(opts: PaperOptions, learned: dict[str, Learned]) -> list[RunCell]
                 RunCell(
                     style,
                     logs,
-                    learned[style].table_path,
+                    tables[style],
                     "obstacles",
                     start,
                     90.0,
@@ -186,30 +189,38 @@ def _run_cells(opts: PaperOptions, learned: dict[str, Learned]) -> list[RunCell]
     return cells
 
 
-def _wave(
-    cells: Sequence[Any], executor: Executor, done: int, total: int
-) -> Iterator[tuple[int, list[Any] | None, str]]:
-    """Run a wave of cells; yields ``(done, None, label)`` per finished cell, then ``(done, values, "")``.
+Cell = LearnCell | RunCell | RelearnCell
 
-    A failed cell fails the report (one line naming the cell)."""
-    batch: Batch[Any, Any, list[Any]] = Batch(
-        call,
-        cells,
-        executor=executor,
-        reduce=lambda outs: [o.value for o in outs],
-        labels=[c.title for c in cells],
-    )
-    for ev in batch:
-        if ev.error is not None:
-            raise LfdError(f"report: {ev.label}: {ev.error}")
-        if ev.index >= 0:
-            yield done + ev.finished, None, ev.label
-    yield done + len(cells), batch.result(), ""
+
+@dataclass(frozen=True)
+class Plan:
+    """Every cell of the report in the order its results are reported, and the cells each waits
+    for (``after``: the learn cell that writes what it reads)."""
+
+    cells: tuple[Cell, ...]
+    after: tuple[tuple[int, ...], ...]
+
+    @property
+    def costs(self) -> tuple[float, ...]:
+        return tuple(c.cost for c in self.cells)
+
+
+def plan_cells(opts: PaperOptions) -> Plan:
+    """The learn cells, the runs, the trials' relearning; each run after the learn of its table,
+    the relearning after the three-goal demo's learn, nothing after anything else."""
+    learns = _learn_cells(opts)
+    runs = _run_cells(opts, {c.key: c.table for c in learns})
+    task = next(c for c in learns if c.key == "task")
+    out = opts.logs / f"three-goals-{opts.trials}trials.yaml"
+    relearn = RelearnCell("trials", task.segmented, opts.estimate(opts.trials), out, task.seconds)
+    writes = {c.table: i for i, c in enumerate(learns)}
+    after = [()] * len(learns) + [(writes[r.table],) for r in runs] + [(learns.index(task),)]
+    return Plan((*learns, *runs, relearn), tuple(after))
 
 
 def run_experiments(opts: PaperOptions, *, executor: Executor | None = None) -> Iterator[ExperimentEvent]:
     """Run every experiment on ``executor`` (default: in this process); yields progress, the last
-    event with the results."""
+    event with the results. A failed cell fails the report (one line naming the cell)."""
     if not 1 <= opts.scale <= MAX_SCALE:
         raise LfdError(f"--scale must be from 1 to {MAX_SCALE}, got {opts.scale}")
     for folder in (opts.logs, *opts.logs.parents):
@@ -220,35 +231,32 @@ def run_experiments(opts: PaperOptions, *, executor: Executor | None = None) -> 
     except OSError as exc:
         raise LfdError(f"cannot create {opts.logs}: {exc.strerror}") from exc
     opts = replace(opts, logs=opts.logs.absolute())  # a worker's working folder may be another
-    ex_ = executor or InProcess()
-    first = _learn_cells(opts)
-    # the second wave's size is known before it starts: 3 styles × (1 + starts) + 6 junction runs …
-    n_runs = len(STYLES) * (1 + (1 if opts.quick else len(ex.BUILDING_STARTS)) + 2)
-    total = len(first) + n_runs + opts.task_starts + 2 * opts.obstacle_runs + 1
+    plan = plan_cells(opts)
+    batch: Batch[Cell, Any, list[Any]] = Batch(
+        call,
+        plan.cells,
+        executor=executor or InProcess(),
+        reduce=lambda outs: [o.value for o in outs],
+        labels=[c.title for c in plan.cells],
+        after=plan.after,
+        costs=plan.costs,
+    )
+    total = len(plan.cells)
     yield ExperimentEvent(0, total, "demonstrate and learn")
-    learned_list: list[Learned] = []
-    for done, values, label in _wave(first, ex_, 0, total):
-        if values is None:
-            yield ExperimentEvent(done, total, label)
-        else:
-            learned_list = values
-    learned = {c.key: v for c, v in zip(first, learned_list, strict=True)}
-    task = learned["task"]
-    trials_out = opts.logs / f"three-goals-{opts.trials}trials.yaml"
-    second: list[RunCell | RelearnCell] = [*_run_cells(opts, learned)]
-    second.append(RelearnCell("trials", task.segmented, opts.estimate(opts.trials), trials_out))
-    values2: list[Any] = []
-    for done, values, label in _wave(second, ex_, len(first), total):
-        if values is None:
-            yield ExperimentEvent(done, total, label)
-        else:
-            values2 = values
+    for ev in batch:
+        if ev.error is not None:
+            raise LfdError(f"report: {ev.label}: {ev.error}")
+        if ev.index >= 0:
+            yield ExperimentEvent(ev.finished, total, ev.label)
+    learned: dict[str, Learned] = {}
     runs: dict[str, list[Run]] = {}
-    for cell, value in zip(second, values2, strict=True):
-        if isinstance(cell, RunCell):
+    for cell, value in zip(plan.cells, batch.result(), strict=True):
+        if isinstance(cell, LearnCell):
+            learned[cell.key] = value
+        elif isinstance(cell, RunCell):
             runs.setdefault(cell.key, []).append(value)
         else:
-            learned["trials"] = replace(task, table_path=cell.out, table=value)
+            learned["trials"] = replace(learned["task"], table_path=cell.out, table=value)
     junctions = {
         style: {
             which: junction_choice(runs[f"junction/{which}"][i].pose[-1], which)
