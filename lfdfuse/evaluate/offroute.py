@@ -20,10 +20,16 @@ import numpy as np
 from lfdfuse import learn
 from lfdfuse.errors import LfdError
 from lfdfuse.estimate.pipeline import EstimateOptions
+from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.execute.starts import perturbed_starts as drawn_starts
+from lfdfuse.log.reader import read_run
 from lfdfuse.network.table import FusionTable
+from lfdfuse.segment.decisions import DecisionParams
+from lfdfuse.segment.read import SegmentedRun, read_segmented
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sources.tasks import Leg
+from lfdfuse.world.generate import generate_offroute
 from lfdfuse.world.model import World, check_pose_free, load_world
 
 
@@ -31,7 +37,7 @@ from lfdfuse.world.model import World, check_pose_free, load_world
 class OffRouteCase:
     """A building, the task its teacher demonstrates, and how long the learned task may take."""
 
-    world: str
+    world: str | World  # a built-in name, or a world in memory (a generated one)
     legs: tuple[Leg, ...]
     max_time_s: float
     order: tuple[str, ...]
@@ -57,11 +63,12 @@ CASES = {
 
 def demonstrate(case: OffRouteCase, *, folder: Path, seed: int = 1) -> Path:
     """The teacher's demo of ``case``, segmented; returns the segmented log."""
+    world = _world(case.world)
     return learn.demonstrate(
         case.legs,
-        world=load_world(case.world),
+        world=world,
         folder=folder,
-        name=f"{case.world}-demo",
+        name=f"{world.name}-demo",
         duration_s=2 * case.max_time_s,
         seed=seed,
     ).segmented
@@ -97,7 +104,7 @@ def run_starts(
 ) -> list[dict[str, Any]]:
     """Execute ``table`` from every start; one row per start."""
     rows = []
-    w = load_world(world or case.world)
+    w = _world(world or case.world)
     for k, start in enumerate(starts):
         res = drive_table(
             ExecuteOptions(world=w, table=table, start=Pose(*start), max_time_s=case.max_time_s, seed=k),
@@ -122,6 +129,84 @@ def run_starts(
     return rows
 
 
+def _world(world: str | World) -> World:
+    return world if isinstance(world, World) else load_world(world)
+
+
 def learn_case(seg: Path, *, subgoals: bool, seed: int = 0) -> FusionTable:
     """The table of a segmented demo: the paper's (one step per goal), or with sub-goals."""
     return learn.learn([seg], options=learn.LearnOptions(EstimateOptions(seed=seed), subgoals=subgoals)).table
+
+
+# ------------------------------------------------------------------ generated off-route worlds
+
+#: the paper's three-goal task (``sample_logs/three-goals.task.yaml``), demonstrated in every generated world
+THREE_GOALS = (Leg("red", "keep-left"), Leg("green", "keep-center"), Leg("blue", "keep-right"))
+#: a learned run may take this many times as long as the teacher took
+TIME_FACTOR = 1.5
+
+
+@dataclass(frozen=True)
+class GeneratedOutcome:
+    """One generated world: its teacher's demo, the decisions found, and per variant (without
+    sub-goals, with them) the outcome from each start."""
+
+    seed: int
+    demo_completed: bool
+    demo_s: float
+    max_time_s: float
+    decisions: tuple[str, ...]  # each sub-goal step's landmark, described
+    rows: tuple[dict[str, Any], ...]  # one per (variant, start): run_starts' rows
+
+    def completed(self, variant: str) -> tuple[bool, ...]:
+        return tuple(bool(r["completed"]) for r in self.rows if r["name"] == variant)
+
+
+def run_generated(
+    seed: int,
+    *,
+    folder: Path,
+    starts: int = 3,
+    params: DecisionParams = DecisionParams(),
+    estimate: EstimateOptions = EstimateOptions(),
+) -> GeneratedOutcome:
+    """Demonstrate the three-goal task in the generated world of ``seed``, learn it without and
+    with sub-goals, and run both tables from ``starts`` perturbed starts (±0.5 m, ±20°, drawn
+    from the seed, as ``execute --starts``). A world whose teacher does not complete the task
+    has no runs."""
+    world = generate_offroute(seed)
+    demo = learn.demonstrate(
+        THREE_GOALS, world=world, folder=folder, name=f"{world.name}-demo", duration_s=900.0, seed=1
+    )
+    max_time_s = float(math.ceil(TIME_FACTOR * demo.duration_s / 10.0) * 10.0)
+    run = read_segmented(demo.segmented)
+    completed = _demo_completed(run)
+    if not completed:
+        return GeneratedOutcome(seed, False, demo.duration_s, max_time_s, (), ())
+    case = OffRouteCase(world, THREE_GOALS, max_time_s, tuple(str(leg.target) for leg in THREE_GOALS))
+    opts = learn.LearnOptions(estimate)
+    plain = learn.learn_run(run, options=opts, name=demo.segmented.name).table
+    track = track_of(read_run(demo.segmented), run, source=str(demo.segmented))
+    sub = refine(plain, run, track, opts=estimate, params=params)
+    poses = [
+        p.as_tuple()
+        for p in drawn_starts(world, Pose(*world.start), n=starts, rng=np.random.default_rng(seed))
+    ]
+    rows: list[dict[str, Any]] = []
+    for label, table in (("reactive", plain), ("subgoals", sub.table)):
+        got = run_starts(table, case, starts=poses, folder=folder, label=label)
+        rows += [{**r, "start": f"perturbed {k + 1}", "seed": seed} for k, r in enumerate(got)]
+    described = tuple(
+        f"{s.name}: {s.landmark.describe()}"
+        for step in sub.table.network.steps
+        if step.network is not None
+        for s in step.network.steps
+        if s.landmark is not None
+    )
+    return GeneratedOutcome(seed, True, demo.duration_s, max_time_s, described, tuple(rows))
+
+
+def _demo_completed(run: SegmentedRun) -> bool:
+    """Every goal of the task reached in the demo (a teacher that did not finish taught nothing whole)."""
+    reached = [s.target for s in run.segments if s.target is not None]
+    return reached == [leg.target for leg in THREE_GOALS]
