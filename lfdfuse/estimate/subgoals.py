@@ -98,7 +98,14 @@ def refine(
                         drive,
                         name=f"to-{d.side}-opening-{d.nth}{tag}",
                         goal=None,
-                        landmark=Landmark("opening", d.side, d.nth, d.odometry_m),
+                        landmark=Landmark(
+                            "opening",
+                            d.side,
+                            d.nth,
+                            d.odometry_m,
+                            count="passed" if d.count == "passed" else "all",
+                            within_m=d.within_m,
+                        ),
                     )
                 )
             inner.append(

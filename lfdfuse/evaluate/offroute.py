@@ -42,6 +42,9 @@ class OffRouteCase:
     max_time_s: float
     order: tuple[str, ...]
 
+    def load(self) -> World:
+        return _world(self.world)
+
 
 CASES = {
     # the spur is the first opening on the left after red; a right-keeper passes it by
@@ -148,14 +151,15 @@ TIME_FACTOR = 1.5
 
 @dataclass(frozen=True)
 class GeneratedOutcome:
-    """One generated world: its teacher's demo, the decisions found, and per variant (without
-    sub-goals, with them) the outcome from each start."""
+    """One generated world: its teacher's demo, and per variant (``reactive``: without
+    sub-goals; the others: with sub-goals found by that variant's decision parameters) the
+    sub-goal landmarks and the outcome from each start."""
 
     seed: int
     demo_completed: bool
     demo_s: float
     max_time_s: float
-    decisions: tuple[str, ...]  # each sub-goal step's landmark, described
+    landmarks: dict[str, tuple[str, ...]]  # per sub-goal variant, each landmark step described
     rows: tuple[dict[str, Any], ...]  # one per (variant, start): run_starts' rows
 
     def completed(self, variant: str) -> tuple[bool, ...]:
@@ -167,43 +171,46 @@ def run_generated(
     *,
     folder: Path,
     starts: int = 3,
-    params: DecisionParams = DecisionParams(),
+    variants: dict[str, DecisionParams] | None = None,
     estimate: EstimateOptions = EstimateOptions(),
 ) -> GeneratedOutcome:
-    """Demonstrate the three-goal task in the generated world of ``seed``, learn it without and
-    with sub-goals, and run both tables from ``starts`` perturbed starts (±0.5 m, ±20°, drawn
+    """Demonstrate the three-goal task in the generated world of ``seed``, learn it without
+    sub-goals and with them (one table per variant of the decision parameters; default: one,
+    ``subgoals``), and run every table from ``starts`` perturbed starts (±0.5 m, ±20°, drawn
     from the seed, as ``execute --starts``). A world whose teacher does not complete the task
     has no runs."""
+    variants = {"subgoals": DecisionParams()} if variants is None else variants
     world = generate_offroute(seed)
     demo = learn.demonstrate(
         THREE_GOALS, world=world, folder=folder, name=f"{world.name}-demo", duration_s=900.0, seed=1
     )
     max_time_s = float(math.ceil(TIME_FACTOR * demo.duration_s / 10.0) * 10.0)
     run = read_segmented(demo.segmented)
-    completed = _demo_completed(run)
-    if not completed:
-        return GeneratedOutcome(seed, False, demo.duration_s, max_time_s, (), ())
+    if not _demo_completed(run):
+        return GeneratedOutcome(seed, False, demo.duration_s, max_time_s, {}, ())
     case = OffRouteCase(world, THREE_GOALS, max_time_s, tuple(str(leg.target) for leg in THREE_GOALS))
-    opts = learn.LearnOptions(estimate)
-    plain = learn.learn_run(run, options=opts, name=demo.segmented.name).table
+    plain = learn.learn_run(run, options=learn.LearnOptions(estimate), name=demo.segmented.name).table
     track = track_of(read_run(demo.segmented), run, source=str(demo.segmented))
-    sub = refine(plain, run, track, opts=estimate, params=params)
+    tables = {"reactive": plain}
+    landmarks: dict[str, tuple[str, ...]] = {}
+    for name, params in variants.items():
+        tables[name] = refine(plain, run, track, opts=estimate, params=params).table
+        landmarks[name] = tuple(
+            f"{s.name}: {s.landmark.describe()}"
+            for step in tables[name].network.steps
+            if step.network is not None
+            for s in step.network.steps
+            if s.landmark is not None
+        )
     poses = [
         p.as_tuple()
         for p in drawn_starts(world, Pose(*world.start), n=starts, rng=np.random.default_rng(seed))
     ]
     rows: list[dict[str, Any]] = []
-    for label, table in (("reactive", plain), ("subgoals", sub.table)):
+    for label, table in tables.items():
         got = run_starts(table, case, starts=poses, folder=folder, label=label)
         rows += [{**r, "start": f"perturbed {k + 1}", "seed": seed} for k, r in enumerate(got)]
-    described = tuple(
-        f"{s.name}: {s.landmark.describe()}"
-        for step in sub.table.network.steps
-        if step.network is not None
-        for s in step.network.steps
-        if s.landmark is not None
-    )
-    return GeneratedOutcome(seed, True, demo.duration_s, max_time_s, described, tuple(rows))
+    return GeneratedOutcome(seed, True, demo.duration_s, max_time_s, landmarks, tuple(rows))
 
 
 def _demo_completed(run: SegmentedRun) -> bool:

@@ -26,10 +26,10 @@ decides from it.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-from lfdfuse.behaviors.landmarks import SIDES
+from lfdfuse.behaviors.landmarks import SIDES, PassedCounter
 from lfdfuse.errors import ConfigError
 
 
@@ -46,12 +46,14 @@ class Cues:
 
 @dataclass
 class Progress:
-    """Openings passed, distance driven and heading change since the active step began."""
+    """Openings met, distance driven and heading change since the active step began."""
 
     openings: list[int]  # onsets on (left, right)
     travelled_m: float = 0.0
     turned_rad: float = 0.0
     onset: tuple[bool, bool] = (False, False)  # at this tick
+    #: openings passed by (not turned into) on each side before this tick
+    passed: PassedCounter = field(default_factory=PassedCounter)
 
     @staticmethod
     def fresh(turned_rad: float = 0.0) -> Progress:
@@ -64,6 +66,7 @@ class Progress:
         self.openings[1] += cues.onset_right
         self.travelled_m += cues.step_m
         self.turned_rad += cues.turn_rad
+        self.passed.update(self.onset, cues.step_m, cues.turn_rad, cues.held_turn_rad)
 
 
 @dataclass(frozen=True)
@@ -75,25 +78,37 @@ class Landmark:
     nth: int = 1
     odometry_m: float | None = None
     angle_rad: float = 0.0
+    #: which openings ``nth`` counts: every onset ("all"), or those passed by ("passed")
+    count: str = "all"
+    #: met at the first opening on the side once ``odometry_m − within_m`` has been driven (nth unused)
+    within_m: float | None = None
     #: an opening matches only after this share of ``odometry_m`` has been driven
     ODOMETRY_SHARE: ClassVar[float] = 0.5
 
     def met(self, p: Progress) -> bool:
         s = SIDES.index(self.side)
         if self.kind == "opening":
+            if not p.onset[s]:
+                return False
+            if self.within_m is not None and self.odometry_m is not None:
+                return p.travelled_m >= self.odometry_m - self.within_m
             far_enough = self.odometry_m is None or p.travelled_m >= self.ODOMETRY_SHARE * self.odometry_m
-            return p.onset[s] and p.openings[s] >= self.nth and far_enough
+            order = p.passed.before[s] + 1 if self.count == "passed" else p.openings[s]
+            return order >= self.nth and far_enough
         sign = 1.0 if self.side == "left" else -1.0
         return sign * p.turned_rad >= self.angle_rad
 
     def describe(self) -> str:
         """One line a person reads: what the robot waits for."""
         if self.kind == "opening":
-            nth = {1: "1st", 2: "2nd", 3: "3rd"}.get(self.nth, f"{self.nth}th")
             odo = (
                 f" (the teacher met it after {self.odometry_m:.1f} m)" if self.odometry_m is not None else ""
             )
-            return f"the {nth} opening on the {self.side}{odo}"
+            if self.within_m is not None and self.odometry_m is not None:
+                return f"the first opening on the {self.side} after {self.odometry_m:.1f} ± {self.within_m:.1f} m"
+            nth = {1: "1st", 2: "2nd", 3: "3rd"}.get(self.nth, f"{self.nth}th")
+            passed = " (counting those passed by)" if self.count == "passed" else ""
+            return f"the {nth} opening on the {self.side}{passed}{odo}"
         return f"turned {math.degrees(self.angle_rad):.0f}° to the {self.side}"
 
     def to_dict(self) -> dict[str, Any]:
@@ -101,6 +116,10 @@ class Landmark:
             d: dict[str, Any] = {"opening": self.side, "nth": self.nth}
             if self.odometry_m is not None:
                 d["odometry_m"] = round(self.odometry_m, 2)
+            if self.count != "all":
+                d["count"] = self.count
+            if self.within_m is not None:
+                d["within_m"] = round(self.within_m, 2)
             return d
         return {"turned": self.side, "angle_rad": round(self.angle_rad, 3)}
 
@@ -112,7 +131,11 @@ class Landmark:
         if len(kinds) != 1:
             raise ConfigError(f"fusion table: {where}: give exactly one of 'opening' or 'turned'")
         kind = kinds[0]
-        allowed = {"opening", "nth", "odometry_m"} if kind == "opening" else {"turned", "angle_rad"}
+        allowed = (
+            {"opening", "nth", "odometry_m", "count", "within_m"}
+            if kind == "opening"
+            else {"turned", "angle_rad"}
+        )
         bad = sorted(set(d) - allowed)
         if bad:
             raise ConfigError(
@@ -130,7 +153,24 @@ class Landmark:
                 isinstance(odo, bool) or not isinstance(odo, (int, float)) or not 0 <= odo < 1e6
             ):
                 raise ConfigError(f"fusion table: {where}.odometry_m must be a distance in metres")
-            return Landmark("opening", side, nth, None if odo is None else float(odo))
+            count = d.get("count", "all")
+            if count not in ("all", "passed"):
+                raise ConfigError(f"fusion table: {where}.count must be 'all' or 'passed'")
+            within = d.get("within_m")
+            if within is not None and (
+                isinstance(within, bool) or not isinstance(within, (int, float)) or not 0 <= within < 1e6
+            ):
+                raise ConfigError(f"fusion table: {where}.within_m must be a distance in metres")
+            if within is not None and odo is None:
+                raise ConfigError(f"fusion table: {where}.within_m needs odometry_m")
+            return Landmark(
+                "opening",
+                side,
+                nth,
+                None if odo is None else float(odo),
+                count=count,
+                within_m=None if within is None else float(within),
+            )
         ang = d.get("angle_rad")
         if isinstance(ang, bool) or not isinstance(ang, (int, float)) or not 0 < ang <= 2 * math.pi:
             raise ConfigError(f"fusion table: {where}.angle_rad must be in (0, 2π]")

@@ -25,8 +25,11 @@ import numpy as np
 from lfdfuse.behaviors.landmarks import (
     SIDES,
     OpeningParams,
+    PassParams,
     odometry_increments,
+    passed_before,
     sensed_onsets,
+    side_openings,
 )
 from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.sim.sensors import ScanGeometry
@@ -106,6 +109,24 @@ class DecisionParams:
     #: while turning on the spot would not carry over to the robot
     at_start_m: float = 0.5
     began_rad: float = math.radians(8.0)  # the teacher's turn began where it left the held heading by this
+    #: which landmark marks the opening: "all" (the n-th onset on the side), "passed" (the
+    #: n-th opening passed by on the side, :class:`PassedCounter`), "distance" (the first
+    #: onset on the side once the teacher's distance less a tolerance has been driven)
+    landmark: str = "all"
+    passing: PassParams = PassParams()
+    #: "distance": the tolerance is this share of the distance, at most half the way back to
+    #: the previous onset on that side, at least ``within_min_m``
+    within_share: float = 0.5
+    within_min_m: float = 1.0
+    #: a turn into a corner (the way ahead closed within this, at the opening's onset, and the
+    #: other side closed) is no decision: there was no other way. None: corners count
+    corner_ahead_m: float | None = None
+    corner_beam_rad: float = math.radians(10.0)
+    corner_other_steps: int = 25  # the other side open this many steps either side of the onset: a T
+    #: the turn landmark looks at the teacher's turn this many steps past the onset at least ...
+    settle_steps: int = 0
+    #: ... and asks for at least the largest turn less this (None: the share alone)
+    turn_margin_rad: float | None = None
 
 
 @dataclass(frozen=True)
@@ -126,6 +147,58 @@ class DecisionPoint:
     #: opening's onset (they knew it was coming); learned from the onset, a turn already half
     #: done would teach the style's steering, not the turn
     begin: int = -1
+    #: how the landmark counts: "all", "passed" or "distance" (:class:`DecisionParams`)
+    count: str = "all"
+    within_m: float | None = None  # "distance": the tolerance on ``odometry_m``
+
+
+def _largest_rise(x: np.ndarray) -> float:
+    """The largest ``x[j] − x[i]`` with ``i ≤ j`` (0 for a falling series)."""
+    return float(np.max(x - np.minimum.accumulate(x)))
+
+
+def _order(track: LandmarkTrack, side: int, since: int, d: int, p: DecisionParams) -> int:
+    """The opening's order on its side since ``since``, as the landmark counts it."""
+    if p.landmark == "passed":
+        lo = since + 1  # the runtime starts a step's count at the tick after the last was met
+        before = passed_before(
+            track.onsets[lo : d + 1],
+            track.step_m[lo : d + 1],
+            track.turn_rad[lo : d + 1],
+            track.held_rad[lo : d + 1],
+            p.passing,
+        )
+        return int(before[-1, side]) + 1
+    return int(track.onsets[since:d, side].sum()) + 1
+
+
+def _within(track: LandmarkTrack, side: int, since: int, d: int, odo: float, p: DecisionParams) -> float:
+    """The distance tolerance: a share of ``odo``, at most half the way back to the previous
+    onset on that side since ``since`` (the robot must not take that one), at least the minimum."""
+    prev = np.nonzero(track.onsets[since:d, side])[0]
+    tol = p.within_share * odo
+    if len(prev):
+        gap = float(track.step_m[since + int(prev[-1]) + 1 : d + 1].sum())
+        tol = min(tol, gap / 2)
+    return max(tol, p.within_min_m)
+
+
+def _corner(track: LandmarkTrack, side: int, d: int, p: DecisionParams) -> bool:
+    """At onset ``d``: the way ahead (from the held heading) closed within ``corner_ahead_m``
+    and the other side closed around it — a corner, not a junction or a T."""
+    if p.corner_ahead_m is None:
+        return False
+    a = np.arctan2(np.sin(track.geometry.angles), np.cos(track.geometry.angles))
+    rel = np.arctan2(np.sin(a + track.held_rad[d]), np.cos(a + track.held_rad[d]))
+    r = np.where(np.isfinite(track.ranges_m[d]) & (track.ranges_m[d] > 0), track.ranges_m[d], np.inf)
+    front = r[np.abs(rel) <= p.corner_beam_rad]
+    if not len(front) or float(np.median(front)) >= p.corner_ahead_m:
+        return False
+    lo, hi = max(d - p.corner_other_steps, 0), min(d + p.corner_other_steps + 1, len(track.held_rad))
+    flags = side_openings(
+        track.ranges_m[lo:hi], track.geometry, track.params, offset_rad=-track.held_rad[lo:hi]
+    )
+    return not bool(flags[:, 1 - side].any())
 
 
 def _runs(mask: np.ndarray, sign: np.ndarray, max_gap: int) -> list[tuple[int, int, float]]:
@@ -183,25 +256,31 @@ def find_decisions(
             s = 0 if sgn > 0 else 1
             ref = max(a - p.lookback, since)
             turned = sgn * np.cumsum(track.turn_rad[ref + 1 : min(b + 25, hi)])
-            if not len(turned) or turned.max() < p.min_turn_rad:
-                continue  # the teacher did not really turn that way
+            if not len(turned) or _largest_rise(turned) < p.min_turn_rad:
+                continue  # the teacher did not really turn that way (from any heading it held before)
             d = _onset_near(track, s, ref, min(b + p.lookahead, hi), a, p.began_rad)
             if d is None:
                 continue  # no opening the robot could recognise: not expressible as a landmark
-            nth = int(track.onsets[since:d, s].sum()) + 1
             odo = float(track.step_m[since : d + 1].sum())
             at_start = odo < p.at_start_m
+            if not at_start and p.corner_ahead_m is not None and _corner(track, s, d, p):
+                continue  # a corner: the teacher turned where there was no other way
+            nth = _order(track, s, since, d, p)
+            within = _within(track, s, since, d, odo, p) if p.landmark == "distance" else None
             if at_start:
                 d = since  # the turn step is all of it: the robot turns where the goal left it
             # the turn landmark counts from the heading the sectors were held at when the turn
             # step began (the heading before the turn, for teacher and robot alike, however
             # early either began to turn): this share of the teacher's largest turn from it
             heading = np.cumsum(track.turn_rad)
-            from_held = sgn * (heading[d : min(b + 25, hi)] - heading[d] + track.held_rad[d])
+            look = min(max(b + 25, d + p.settle_steps), hi)
+            from_held = sgn * (heading[d:look] - heading[d] + track.held_rad[d])
             # ... and at least ``turn_after_rad`` beyond where the teacher had turned at the onset
             # (met mid-turn, a share of the whole would leave the step a sliver of the turn), but
             # never beyond the teacher's whole turn
             want = max(p.turn_share * from_held.max(), min(from_held[0] + p.turn_after_rad, from_held.max()))
+            if p.turn_margin_rad is not None:
+                want = max(want, from_held.max() - p.turn_margin_rad)
             angle = float(np.clip(want, p.min_angle_rad, p.max_angle_rad))
             reach = np.nonzero(from_held[1:] >= angle)[0]
             if not len(reach):
@@ -212,7 +291,21 @@ def find_decisions(
             div = float(np.abs(raw[a:b][valid[a:b]]).mean())
             begin = _turn_began(heading, track.held_rad, d, max(since, d - p.lookback), sgn, p.began_rad)
             out.append(
-                DecisionPoint(seg.index, SIDES[s], d, end, nth, since, odo, angle, div, at_start, begin)
+                DecisionPoint(
+                    seg.index,
+                    SIDES[s],
+                    d,
+                    end,
+                    nth,
+                    since,
+                    odo,
+                    angle,
+                    div,
+                    at_start,
+                    begin,
+                    p.landmark,
+                    within,
+                )
             )
             since = end
     return out
