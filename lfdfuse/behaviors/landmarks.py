@@ -227,6 +227,9 @@ class PassParams:
     #: ... within this much travel after it: the route turned into it (a corner, a turn-off);
     #: an opening driven past this far without that turn was passed by
     pass_m: float = 2.5
+    #: an onset this close (travel) after the last one on its side is that opening flickering
+    #: at its edge (met while turning, the sectors sweep its corner twice), not another one
+    merge_m: float = 1.5
 
 
 class PassedCounter:
@@ -246,8 +249,11 @@ class PassedCounter:
         self._pending: list[tuple[int, float, float]] = []  # (side, odometry, held heading) of an onset
         self._odo_m = 0.0
         self._heading = 0.0
+        self._last = [-math.inf, -math.inf]  # odometry of the last onset per side
         #: per side, openings met before this tick and not turned into
         self.before = (0, 0)
+        #: per side, whether this tick's onset is a new opening (not one flickering at its edge)
+        self.new = (False, False)
 
     def update(self, onset: tuple[bool, bool], step_m: float, turn_rad: float, held_turn_rad: float) -> None:
         """This tick's onsets (left, right), odometry increment (m, rad), and how far the robot
@@ -266,9 +272,14 @@ class PassedCounter:
         self._pending = keep
         waiting = [sum(1 for s, _, _ in keep if s == side) for side in (LEFT, RIGHT)]
         self.before = (self.passed[LEFT] + waiting[LEFT], self.passed[RIGHT] + waiting[RIGHT])
+        new = [False, False]
         for side in (LEFT, RIGHT):
             if onset[side]:
-                self._pending.append((side, self._odo_m, self._heading - held_turn_rad))
+                if self._odo_m - self._last[side] >= self.params.merge_m:
+                    self._pending.append((side, self._odo_m, self._heading - held_turn_rad))
+                    new[side] = True
+                self._last[side] = self._odo_m
+        self.new = (new[LEFT], new[RIGHT])
 
 
 def passed_before(
@@ -277,16 +288,18 @@ def passed_before(
     turn_rad: np.ndarray,
     held_rad: np.ndarray,
     params: PassParams = PassParams(),
-) -> np.ndarray:
-    """``(N, 2)`` :attr:`PassedCounter.before` at each tick of a log's cues, counted from its first tick."""
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(N, 2)`` :attr:`PassedCounter.before` and ``(N, 2)`` :attr:`PassedCounter.new` at each
+    tick of a log's cues, counted from its first tick."""
     counter = PassedCounter(params)
-    out = np.zeros((len(onsets), 2), dtype=np.int64)
+    before = np.zeros((len(onsets), 2), dtype=np.int64)
+    new = np.zeros((len(onsets), 2), dtype=bool)
     for i in range(len(onsets)):
         counter.update(
             (bool(onsets[i, 0]), bool(onsets[i, 1])), float(step_m[i]), float(turn_rad[i]), float(held_rad[i])
         )
-        out[i] = counter.before
-    return out
+        before[i], new[i] = counter.before, counter.new
+    return before, new
 
 
 def opening_onsets(

@@ -20,16 +20,10 @@ import numpy as np
 from lfdfuse import learn
 from lfdfuse.errors import LfdError
 from lfdfuse.estimate.pipeline import EstimateOptions
-from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.run import ExecuteOptions, drive_table
-from lfdfuse.execute.starts import perturbed_starts as drawn_starts
-from lfdfuse.log.reader import read_run
 from lfdfuse.network.table import FusionTable
-from lfdfuse.segment.decisions import DecisionParams
-from lfdfuse.segment.read import SegmentedRun, read_segmented
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sources.tasks import Leg
-from lfdfuse.world.generate import generate_offroute
 from lfdfuse.world.model import World, check_pose_free, load_world
 
 
@@ -139,81 +133,3 @@ def _world(world: str | World) -> World:
 def learn_case(seg: Path, *, subgoals: bool, seed: int = 0) -> FusionTable:
     """The table of a segmented demo: the paper's (one step per goal), or with sub-goals."""
     return learn.learn([seg], options=learn.LearnOptions(EstimateOptions(seed=seed), subgoals=subgoals)).table
-
-
-# ------------------------------------------------------------------ generated off-route worlds
-
-#: the paper's three-goal task (``sample_logs/three-goals.task.yaml``), demonstrated in every generated world
-THREE_GOALS = (Leg("red", "keep-left"), Leg("green", "keep-center"), Leg("blue", "keep-right"))
-#: a learned run may take this many times as long as the teacher took
-TIME_FACTOR = 1.5
-
-
-@dataclass(frozen=True)
-class GeneratedOutcome:
-    """One generated world: its teacher's demo, and per variant (``reactive``: without
-    sub-goals; the others: with sub-goals found by that variant's decision parameters) the
-    sub-goal landmarks and the outcome from each start."""
-
-    seed: int
-    demo_completed: bool
-    demo_s: float
-    max_time_s: float
-    landmarks: dict[str, tuple[str, ...]]  # per sub-goal variant, each landmark step described
-    rows: tuple[dict[str, Any], ...]  # one per (variant, start): run_starts' rows
-
-    def completed(self, variant: str) -> tuple[bool, ...]:
-        return tuple(bool(r["completed"]) for r in self.rows if r["name"] == variant)
-
-
-def run_generated(
-    seed: int,
-    *,
-    folder: Path,
-    starts: int = 3,
-    variants: dict[str, DecisionParams] | None = None,
-    estimate: EstimateOptions = EstimateOptions(),
-) -> GeneratedOutcome:
-    """Demonstrate the three-goal task in the generated world of ``seed``, learn it without
-    sub-goals and with them (one table per variant of the decision parameters; default: one,
-    ``subgoals``), and run every table from ``starts`` perturbed starts (±0.5 m, ±20°, drawn
-    from the seed, as ``execute --starts``). A world whose teacher does not complete the task
-    has no runs."""
-    variants = {"subgoals": DecisionParams()} if variants is None else variants
-    world = generate_offroute(seed)
-    demo = learn.demonstrate(
-        THREE_GOALS, world=world, folder=folder, name=f"{world.name}-demo", duration_s=900.0, seed=1
-    )
-    max_time_s = float(math.ceil(TIME_FACTOR * demo.duration_s / 10.0) * 10.0)
-    run = read_segmented(demo.segmented)
-    if not _demo_completed(run):
-        return GeneratedOutcome(seed, False, demo.duration_s, max_time_s, {}, ())
-    case = OffRouteCase(world, THREE_GOALS, max_time_s, tuple(str(leg.target) for leg in THREE_GOALS))
-    plain = learn.learn_run(run, options=learn.LearnOptions(estimate), name=demo.segmented.name).table
-    track = track_of(read_run(demo.segmented), run, source=str(demo.segmented))
-    tables = {"reactive": plain}
-    landmarks: dict[str, tuple[str, ...]] = {}
-    for name, params in variants.items():
-        tables[name] = refine(plain, run, track, opts=estimate, params=params).table
-        landmarks[name] = tuple(
-            f"{s.name}: {s.landmark.describe()}"
-            for step in tables[name].network.steps
-            if step.network is not None
-            for s in step.network.steps
-            if s.landmark is not None
-        )
-    poses = [
-        p.as_tuple()
-        for p in drawn_starts(world, Pose(*world.start), n=starts, rng=np.random.default_rng(seed))
-    ]
-    rows: list[dict[str, Any]] = []
-    for label, table in tables.items():
-        got = run_starts(table, case, starts=poses, folder=folder, label=label)
-        rows += [{**r, "start": f"perturbed {k + 1}", "seed": seed} for k, r in enumerate(got)]
-    return GeneratedOutcome(seed, True, demo.duration_s, max_time_s, landmarks, tuple(rows))
-
-
-def _demo_completed(run: SegmentedRun) -> bool:
-    """Every goal of the task reached in the demo (a teacher that did not finish taught nothing whole)."""
-    reached = [s.target for s in run.segments if s.target is not None]
-    return reached == [leg.target for leg in THREE_GOALS]

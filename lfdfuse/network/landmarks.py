@@ -93,8 +93,9 @@ class Landmark:
             if self.within_m is not None and self.odometry_m is not None:
                 return p.travelled_m >= self.odometry_m - self.within_m
             far_enough = self.odometry_m is None or p.travelled_m >= self.ODOMETRY_SHARE * self.odometry_m
-            order = p.passed.before[s] + 1 if self.count == "passed" else p.openings[s]
-            return order >= self.nth and far_enough
+            if self.count == "passed":
+                return p.passed.new[s] and p.passed.before[s] + 1 >= self.nth and far_enough
+            return p.openings[s] >= self.nth and far_enough
         sign = 1.0 if self.side == "left" else -1.0
         return sign * p.turned_rad >= self.angle_rad
 

@@ -161,14 +161,14 @@ def _order(track: LandmarkTrack, side: int, since: int, d: int, p: DecisionParam
     """The opening's order on its side since ``since``, as the landmark counts it."""
     if p.landmark == "passed":
         lo = since + 1  # the runtime starts a step's count at the tick after the last was met
-        before = passed_before(
-            track.onsets[lo : d + 1],
-            track.step_m[lo : d + 1],
-            track.turn_rad[lo : d + 1],
-            track.held_rad[lo : d + 1],
-            p.passing,
+        if d < lo:
+            return 1
+        cut = slice(lo, d + 1)
+        before, new = passed_before(
+            track.onsets[cut], track.step_m[cut], track.turn_rad[cut], track.held_rad[cut], p.passing
         )
-        return int(before[-1, side]) + 1
+        # an onset flickering at the edge of an opening met just before is that opening
+        return int(before[-1, side]) + int(new[-1, side])
     return int(track.onsets[since:d, side].sum()) + 1
 
 

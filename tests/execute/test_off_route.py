@@ -59,16 +59,27 @@ def _table(landmark: dict) -> dict:  # type: ignore[type-arg]
     }
 
 
-def test_landmark_steps_round_trip_and_match_the_schema() -> None:
-    data = _table({"opening": "left", "nth": 2, "odometry_m": 7.9})
+@pytest.mark.parametrize(
+    "landmark",
+    [
+        {"opening": "left", "nth": 2, "odometry_m": 7.9},
+        {"opening": "left", "nth": 2, "odometry_m": 7.9, "count": "passed"},
+        {"opening": "left", "nth": 2, "odometry_m": 7.9, "within_m": 2.5},
+    ],
+)
+def test_landmark_steps_round_trip_and_match_the_schema(landmark: dict[str, Any]) -> None:
+    data = _table(landmark)
     jsonschema.validate(data, SCHEMA)
     table = parse_table(data)
     again = yaml.safe_load(dump_table(table))
     jsonschema.validate(again, SCHEMA)
     assert parse_table(again) == table
     inner = table.network.steps[0].network
-    assert inner is not None and inner.steps[0].landmark == Landmark("opening", "left", 2, 7.9)
-    assert "2nd opening on the left" in inner.steps[0].landmark.describe()
+    assert inner is not None and inner.steps[0].landmark == Landmark(
+        "opening", "left", 2, 7.9, count=landmark.get("count", "all"), within_m=landmark.get("within_m")
+    )
+    said = inner.steps[0].landmark.describe()
+    assert ("7.9 ± 2.5 m" in said) if "within_m" in landmark else ("2nd opening on the left" in said)
 
 
 @pytest.mark.parametrize(
@@ -79,6 +90,9 @@ def test_landmark_steps_round_trip_and_match_the_schema() -> None:
         {"opening": "left", "turned": "left"},
         {"turned": "left", "angle_rad": -1},
         {"opening": "left", "colour": "red"},
+        {"opening": "left", "count": "some"},
+        {"opening": "left", "within_m": 2.0},
+        {"opening": "left", "odometry_m": 9.0, "within_m": -1.0},
         "left",
     ],
 )
@@ -142,6 +156,33 @@ def test_sectors_are_held_in_corridors_and_turn_with_the_robot_in_rooms() -> Non
         room.update(np.full(geom.count, 2.4), 0.0, math.radians(9))
     assert corridor.holding and math.isclose(corridor.held_turn_rad, math.radians(90))
     assert not room.holding and room.held_turn_rad == 0.0
+
+
+def test_a_distance_landmark_is_met_at_the_first_opening_on_its_side_past_the_window() -> None:
+    lm = Landmark("opening", "left", nth=3, odometry_m=10.0, within_m=2.0)
+    p = Progress.fresh()
+    p.add(Cues(onset_left=True, step_m=7.9))
+    assert not lm.met(p)  # before 10 − 2 m: not yet, whatever the count
+    p.add(Cues(onset_right=True, step_m=0.2))
+    assert not lm.met(p)  # the other side
+    p.add(Cues(onset_left=True, step_m=0.1))
+    assert lm.met(p)  # the second left onset, but within the window: nth is not used
+
+
+def test_a_passed_count_ignores_openings_turned_into() -> None:
+    lm = Landmark("opening", "left", nth=2, count="passed")
+    p = Progress.fresh()
+    p.add(Cues(onset_left=True, step_m=0.1))
+    for _ in range(10):  # the route turns into it: a corner
+        p.add(Cues(step_m=0.1, turn_rad=math.radians(9)))
+    for _ in range(30):
+        p.add(Cues(step_m=0.1))
+    p.add(Cues(onset_left=True, step_m=0.1))
+    assert not lm.met(p) and p.openings == [2, 0]  # the 2nd onset, but the 1st passed by
+    for _ in range(30):
+        p.add(Cues(step_m=0.1))
+    p.add(Cues(onset_left=True, step_m=0.1))
+    assert lm.met(p)
 
 
 def test_progress_counts_per_side() -> None:
