@@ -127,6 +127,7 @@ class NetworkDriver:
         self.unseen_ticks = 0
         self.last: Decision | None = None
         self._turn = 0.0
+        self._spin = 0.0  # the side the safety reflex turns on the spot to while boxed in (0: not boxed in)
         self.safety = safety
         self.reflex_ticks = 0
         self.last_outputs: Any = None
@@ -208,8 +209,10 @@ class NetworkDriver:
         if self.noise > 0:
             heading += float(self.rng.normal(0.0, self.noise))
         if self.safety is not None:
-            safe = free_heading(heading, reading.ranges_m, self.geometry.angles, self.safety)
+            safe = free_heading(heading, reading.ranges_m, self.geometry.angles, self.safety, spin=self._spin)
             self.reflex_ticks += safe != heading
+            # boxed in (no free heading ahead): keep turning the way it began until free again
+            self._spin = math.copysign(1.0, safe) if abs(safe) > math.pi / 2 and safe != heading else 0.0
             heading = safe
         v, w = heading_to_command(np.array(heading), self.robot.drive)
         return float(v), float(w)
