@@ -22,19 +22,9 @@ class SafetyParams:
 
 
 def free_heading(
-    rel_rad: float,
-    ranges_m: np.ndarray,
-    angles_rad: np.ndarray,
-    p: SafetyParams = SafetyParams(),
-    *,
-    spin: float = 0.0,
+    rel_rad: float, ranges_m: np.ndarray, angles_rad: np.ndarray, p: SafetyParams = SafetyParams()
 ) -> float:
-    """The free robot-frame heading nearest ``rel_rad`` (see the module docstring).
-
-    With no free heading within ±90° the robot turns on the spot toward ``rel_rad``'s side, or
-    toward ``spin``'s side when it is non-zero: a caller that keeps the side it turned to last
-    does not dither between left and right as the wanted heading swings across straight ahead.
-    """
+    """The free robot-frame heading nearest ``rel_rad`` (see the module docstring)."""
     # no return (inf, NaN, 0) counts as range 0 here, which no strip test accepts (along > 0)
     r1 = np.where(np.isfinite(ranges_m) & (ranges_m > 0), ranges_m, 0.0)
     d1 = angles_rad - rel_rad
@@ -51,6 +41,5 @@ def free_heading(
     blocked = ((along > 0) & (along < p.lookahead_m) & (lateral < p.halfwidth_m)).any(axis=1)
     free = np.nonzero(~blocked)[0]
     if len(free) == 0:
-        side = spin if spin != 0.0 else (rel_rad if rel_rad != 0.0 else 1.0)
-        return math.copysign(math.pi / 2 + 0.3, side)
+        return math.copysign(math.pi / 2 + 0.3, rel_rad if rel_rad != 0.0 else 1.0)
     return float(cands[free[0]])

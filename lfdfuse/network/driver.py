@@ -94,6 +94,10 @@ def check_table_world(table: FusionTable, world: World) -> None:
         )
 
 
+#: a heading this far to a side turns the robot (nearly) on the spot: the speed falls with cos θ
+_ON_THE_SPOT_RAD = math.radians(85.0)
+
+
 class NetworkDriver:
     """Drives with a fusion table; optional heading noise makes it a network *teacher*."""
 
@@ -127,7 +131,7 @@ class NetworkDriver:
         self.unseen_ticks = 0
         self.last: Decision | None = None
         self._turn = 0.0
-        self._spin = 0.0  # the side the safety reflex turns on the spot to while boxed in (0: not boxed in)
+        self._spin = 0.0  # the side of the last turn on the spot (0: the last tick drove on)
         self.safety = safety
         self.reflex_ticks = 0
         self.last_outputs: Any = None
@@ -209,10 +213,17 @@ class NetworkDriver:
         if self.noise > 0:
             heading += float(self.rng.normal(0.0, self.noise))
         if self.safety is not None:
-            safe = free_heading(heading, reading.ranges_m, self.geometry.angles, self.safety, spin=self._spin)
+            safe = free_heading(heading, reading.ranges_m, self.geometry.angles, self.safety)
             self.reflex_ticks += safe != heading
-            # boxed in (no free heading ahead): keep turning the way it began until free again
-            self._spin = math.copysign(1.0, safe) if abs(safe) > math.pi / 2 and safe != heading else 0.0
             heading = safe
+        if abs(heading) >= _ON_THE_SPOT_RAD:
+            # a turn on the spot: keep to the side the last one turned to. Where the pull swings
+            # across the robot from tick to tick (two rows in turn, a wall straight ahead) a turn
+            # left undone by a turn right leaves the robot where it is until the time runs out
+            if self._spin != 0.0 and math.copysign(1.0, heading) != self._spin:
+                heading = math.copysign(abs(heading), self._spin)
+            self._spin = math.copysign(1.0, heading)
+        else:
+            self._spin = 0.0
         v, w = heading_to_command(np.array(heading), self.robot.drive)
         return float(v), float(w)
