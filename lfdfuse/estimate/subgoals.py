@@ -105,6 +105,7 @@ def refine(
                             d.odometry_m,
                             count="passed" if d.count == "passed" else "all",
                             within_m=d.within_m,
+                            then_m=d.then_m,
                         ),
                     )
                 )

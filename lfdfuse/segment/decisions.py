@@ -127,6 +127,10 @@ class DecisionParams:
     settle_steps: int = 0
     #: ... and asks for at least the largest turn less this (None: the share alone)
     turn_margin_rad: float | None = None
+    #: the robot begins its turn this share of the teacher's travel from the opening's onset to
+    #: the end of its turn after the onset: turning tighter than the teacher (which began early),
+    #: it ends the turn about where the teacher did rather than short of it, at a corner's tip
+    then_share: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -150,6 +154,7 @@ class DecisionPoint:
     #: how the landmark counts: "all", "passed" or "distance" (:class:`DecisionParams`)
     count: str = "all"
     within_m: float | None = None  # "distance": the tolerance on ``odometry_m``
+    then_m: float = 0.0  # the turn begins this far after the opening's onset
 
 
 def _largest_rise(x: np.ndarray) -> float:
@@ -305,6 +310,7 @@ def find_decisions(
                     begin,
                     p.landmark,
                     within,
+                    0.0 if at_start else p.then_share * float(track.step_m[d + 1 : end + 1].sum()),
                 )
             )
             since = end
