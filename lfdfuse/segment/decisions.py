@@ -188,22 +188,39 @@ def _within(track: LandmarkTrack, side: int, since: int, d: int, odo: float, p: 
     return max(tol, p.within_min_m)
 
 
-def _corner(track: LandmarkTrack, side: int, d: int, p: DecisionParams) -> bool:
-    """At onset ``d``: the way ahead (from the held heading) closed within ``corner_ahead_m``
-    and the other side closed around it — a corner, not a junction or a T."""
-    if p.corner_ahead_m is None:
-        return False
+def _ahead_m(track: LandmarkTrack, d: int, p: DecisionParams) -> float:
+    """How far the way ahead is open at step ``d``, along the held heading (median of the
+    beams within ``corner_beam_rad`` of it; inf without such beams)."""
     a = np.arctan2(np.sin(track.geometry.angles), np.cos(track.geometry.angles))
     rel = np.arctan2(np.sin(a + track.held_rad[d]), np.cos(a + track.held_rad[d]))
     r = np.where(np.isfinite(track.ranges_m[d]) & (track.ranges_m[d] > 0), track.ranges_m[d], np.inf)
     front = r[np.abs(rel) <= p.corner_beam_rad]
-    if not len(front) or float(np.median(front)) >= p.corner_ahead_m:
+    return float(np.median(front)) if len(front) else math.inf
+
+
+def _closed_ahead(track: LandmarkTrack, d: int, p: DecisionParams) -> bool:
+    return p.corner_ahead_m is not None and _ahead_m(track, d, p) < p.corner_ahead_m
+
+
+def _corner(track: LandmarkTrack, side: int, d: int, p: DecisionParams) -> bool:
+    """At onset ``d``: the way ahead (from the held heading) closed within ``corner_ahead_m``
+    and the other side closed around it — a corner, not a junction or a T."""
+    if not _closed_ahead(track, d, p):
         return False
     lo, hi = max(d - p.corner_other_steps, 0), min(d + p.corner_other_steps + 1, len(track.held_rad))
     flags = side_openings(
         track.ranges_m[lo:hi], track.geometry, track.params, offset_rad=-track.held_rad[lo:hi]
     )
     return not bool(flags[:, 1 - side].any())
+
+
+def _then(track: LandmarkTrack, d: int, end: int, at_start: bool, p: DecisionParams) -> float:
+    """How far past the opening's onset the robot begins its turn: at a T (the way ahead closed)
+    ``then_share`` of the teacher's travel through its turn, so a robot turning tighter than the
+    teacher does not end its turn at the tip of the corner it turns round; elsewhere at once."""
+    if at_start or not _closed_ahead(track, d, p):
+        return 0.0
+    return p.then_share * float(track.step_m[d + 1 : end + 1].sum())
 
 
 def _runs(mask: np.ndarray, sign: np.ndarray, max_gap: int) -> list[tuple[int, int, float]]:
@@ -310,7 +327,7 @@ def find_decisions(
                     begin,
                     p.landmark,
                     within,
-                    0.0 if at_start else p.then_share * float(track.step_m[d + 1 : end + 1].sum()),
+                    _then(track, d, end, at_start, p),
                 )
             )
             since = end
