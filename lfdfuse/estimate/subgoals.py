@@ -24,12 +24,13 @@ from lfdfuse.errors import LogError
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_segments, run_rng
 from lfdfuse.estimate.replay import fused_vectors
 from lfdfuse.log.reader import Run
-from lfdfuse.network.landmarks import Landmark
+from lfdfuse.network.landmarks import Landmark, OpeningCount
 from lfdfuse.network.table import FusionTable, Network, Step
 from lfdfuse.segment.decisions import (
     DecisionParams,
     DecisionPoint,
     LandmarkTrack,
+    OpeningCue,
     find_decisions,
     landmark_track,
     split_segments,
@@ -103,7 +104,7 @@ def refine(
                             d.side,
                             d.nth,
                             d.odometry_m,
-                            count="passed" if d.count == "passed" else "all",
+                            count=OpeningCount.PASSED if d.cue == OpeningCue.PASSED else OpeningCount.ALL,
                             within_m=d.within_m,
                             then_m=d.then_m,
                         ),

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import Any, ClassVar
 
 from lfdfuse.behaviors.landmarks import SIDES, PassedCounter
@@ -71,6 +72,15 @@ class Progress:
         self.passed.update(self.onset, cues.step_m, cues.turn_rad, cues.held_turn_rad)
 
 
+class OpeningCount(StrEnum):
+    """Which openings an opening landmark's ``nth`` counts since its step began."""
+
+    #: every onset on the side (issue 15; a table without ``count`` means this)
+    ALL = "all"
+    #: openings passed by, not turned into (:class:`lfdfuse.behaviors.landmarks.PassedCounter`)
+    PASSED = "passed"
+
+
 @dataclass(frozen=True)
 class Landmark:
     """A postcondition recognised from the robot's own sensors (see the module docstring)."""
@@ -80,8 +90,7 @@ class Landmark:
     nth: int = 1
     odometry_m: float | None = None
     angle_rad: float = 0.0
-    #: which openings ``nth`` counts: every onset ("all"), or those passed by ("passed")
-    count: str = "all"
+    count: OpeningCount = OpeningCount.ALL
     #: met at the first opening on the side once ``odometry_m − within_m`` has been driven (nth unused)
     within_m: float | None = None
     #: met this far (m) after the opening was met, not at its onset
@@ -110,7 +119,7 @@ class Landmark:
         if self.within_m is not None and self.odometry_m is not None:
             return p.travelled_m >= self.odometry_m - self.within_m
         far_enough = self.odometry_m is None or p.travelled_m >= self.ODOMETRY_SHARE * self.odometry_m
-        if self.count == "passed":
+        if self.count == OpeningCount.PASSED:
             return p.passed.new[s] and p.passed.before[s] + 1 >= self.nth and far_enough
         return p.openings[s] >= self.nth and far_enough
 
@@ -123,7 +132,7 @@ class Landmark:
             if self.within_m is not None and self.odometry_m is not None:
                 return f"the first opening on the {self.side} after {self.odometry_m:.1f} ± {self.within_m:.1f} m"
             nth = {1: "1st", 2: "2nd", 3: "3rd"}.get(self.nth, f"{self.nth}th")
-            passed = " (counting those passed by)" if self.count == "passed" else ""
+            passed = " (counting those passed by)" if self.count == OpeningCount.PASSED else ""
             return f"the {nth} opening on the {self.side}{passed}{odo}"
         return f"turned {math.degrees(self.angle_rad):.0f}° to the {self.side}"
 
@@ -132,8 +141,8 @@ class Landmark:
             d: dict[str, Any] = {"opening": self.side, "nth": self.nth}
             if self.odometry_m is not None:
                 d["odometry_m"] = round(self.odometry_m, 2)
-            if self.count != "all":
-                d["count"] = self.count
+            if self.count != OpeningCount.ALL:
+                d["count"] = str(self.count)
             if self.within_m is not None:
                 d["within_m"] = round(self.within_m, 2)
             if self.then_m > 0:
@@ -172,7 +181,7 @@ class Landmark:
             ):
                 raise ConfigError(f"fusion table: {where}.odometry_m must be a distance in metres")
             count = d.get("count", "all")
-            if count not in ("all", "passed"):
+            if count not in set(OpeningCount):
                 raise ConfigError(f"fusion table: {where}.count must be 'all' or 'passed'")
             within = d.get("within_m")
             if within is not None and (
@@ -189,7 +198,7 @@ class Landmark:
                 side,
                 nth,
                 None if odo is None else float(odo),
-                count=count,
+                count=OpeningCount(count),
                 within_m=None if within is None else float(within),
                 then_m=float(then),
             )

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from enum import StrEnum
 
 import numpy as np
 
@@ -89,6 +90,18 @@ def _turn_began(heading: np.ndarray, held_rad: np.ndarray, d: int, lo: int, sgn:
     return lo + (int(before[-1]) + 1 if len(before) else 0)
 
 
+class OpeningCue(StrEnum):
+    """How a decision's drive-on step recognises its opening: the alternatives measured on the
+    generated off-route worlds (issue 21)."""
+
+    #: the n-th onset on the side since the step began (issue 15)
+    ALL = "all"
+    #: the n-th opening on the side passed by, not turned into (:class:`PassedCounter`)
+    PASSED = "passed"
+    #: the first onset on the side once the teacher's distance less a tolerance has been driven
+    DISTANCE = "distance"
+
+
 @dataclass(frozen=True)
 class DecisionParams:
     divergence_rad: float = math.radians(15.0)  # demo vs fused heading (smoothed): a different way
@@ -109,12 +122,9 @@ class DecisionParams:
     #: while turning on the spot would not carry over to the robot
     at_start_m: float = 0.5
     began_rad: float = math.radians(8.0)  # the teacher's turn began where it left the held heading by this
-    #: which landmark marks the opening: "all" (the n-th onset on the side), "passed" (the
-    #: n-th opening passed by on the side, :class:`PassedCounter`), "distance" (the first
-    #: onset on the side once the teacher's distance less a tolerance has been driven)
-    landmark: str = "all"
+    landmark: OpeningCue = OpeningCue.ALL  # how the opening is recognised
     passing: PassParams = PassParams()
-    #: "distance": the tolerance is this share of the distance, at most half the way back to
+    #: DISTANCE: the tolerance is this share of the distance, at most half the way back to
     #: the previous onset on that side, at least ``within_min_m``
     within_share: float = 0.5
     within_min_m: float = 1.0
@@ -151,9 +161,8 @@ class DecisionPoint:
     #: opening's onset (they knew it was coming); learned from the onset, a turn already half
     #: done would teach the style's steering, not the turn
     begin: int = -1
-    #: how the landmark counts: "all", "passed" or "distance" (:class:`DecisionParams`)
-    count: str = "all"
-    within_m: float | None = None  # "distance": the tolerance on ``odometry_m``
+    cue: OpeningCue = OpeningCue.ALL  # how the opening is recognised
+    within_m: float | None = None  # DISTANCE: the tolerance on ``odometry_m``
     then_m: float = 0.0  # the turn begins this far after the opening's onset
 
 
@@ -164,7 +173,7 @@ def _largest_rise(x: np.ndarray) -> float:
 
 def _order(track: LandmarkTrack, side: int, since: int, d: int, p: DecisionParams) -> int:
     """The opening's order on its side since ``since``, as the landmark counts it."""
-    if p.landmark == "passed":
+    if p.landmark == OpeningCue.PASSED:
         lo = since + 1  # the runtime starts a step's count at the tick after the last was met
         if d < lo:
             return 1
@@ -288,7 +297,7 @@ def find_decisions(
             if not at_start and p.corner_ahead_m is not None and _corner(track, s, d, p):
                 continue  # a corner: the teacher turned where there was no other way
             nth = _order(track, s, since, d, p)
-            within = _within(track, s, since, d, odo, p) if p.landmark == "distance" else None
+            within = _within(track, s, since, d, odo, p) if p.landmark == OpeningCue.DISTANCE else None
             if at_start:
                 d = since  # the turn step is all of it: the robot turns where the goal left it
             # the turn landmark counts from the heading the sectors were held at when the turn
@@ -325,7 +334,7 @@ def find_decisions(
                     div,
                     at_start,
                     begin,
-                    p.landmark,
+                    OpeningCue(p.landmark),
                     within,
                     _then(track, d, end, at_start, p),
                 )
