@@ -106,7 +106,6 @@ def refine(
                             d.odometry_m,
                             count=OpeningCount.PASSED if d.cue == OpeningCue.PASSED else OpeningCount.ALL,
                             within_m=d.within_m,
-                            then_m=d.then_m,
                         ),
                     )
                 )

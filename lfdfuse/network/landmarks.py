@@ -55,8 +55,6 @@ class Progress:
     onset: tuple[bool, bool] = (False, False)  # at this tick
     #: openings passed by (not turned into) on each side before this tick
     passed: PassedCounter = field(default_factory=PassedCounter)
-    #: where (travelled_m) the step's opening was met, when its landmark waits ``then_m`` more
-    met_at_m: float | None = None
 
     @staticmethod
     def fresh(turned_rad: float = 0.0) -> Progress:
@@ -93,22 +91,13 @@ class Landmark:
     count: OpeningCount = OpeningCount.ALL
     #: met at the first opening on the side once ``odometry_m − within_m`` has been driven (nth unused)
     within_m: float | None = None
-    #: met this far (m) after the opening was met, not at its onset
-    then_m: float = 0.0
     #: an opening matches only after this share of ``odometry_m`` has been driven
     ODOMETRY_SHARE: ClassVar[float] = 0.5
 
     def met(self, p: Progress) -> bool:
         s = SIDES.index(self.side)
         if self.kind == "opening":
-            if p.met_at_m is not None:
-                return p.travelled_m - p.met_at_m >= self.then_m
-            if not self._opening(p, s):
-                return False
-            if self.then_m > 0:
-                p.met_at_m = p.travelled_m
-                return False
-            return True
+            return self._opening(p, s)
         sign = 1.0 if self.side == "left" else -1.0
         return sign * p.turned_rad >= self.angle_rad
 
@@ -145,8 +134,6 @@ class Landmark:
                 d["count"] = str(self.count)
             if self.within_m is not None:
                 d["within_m"] = round(self.within_m, 2)
-            if self.then_m > 0:
-                d["then_m"] = round(self.then_m, 2)
             return d
         return {"turned": self.side, "angle_rad": round(self.angle_rad, 3)}
 
@@ -159,7 +146,7 @@ class Landmark:
             raise ConfigError(f"fusion table: {where}: give exactly one of 'opening' or 'turned'")
         kind = kinds[0]
         allowed = (
-            {"opening", "nth", "odometry_m", "count", "within_m", "then_m"}
+            {"opening", "nth", "odometry_m", "count", "within_m"}
             if kind == "opening"
             else {"turned", "angle_rad"}
         )
@@ -190,9 +177,6 @@ class Landmark:
                 raise ConfigError(f"fusion table: {where}.within_m must be a distance in metres")
             if within is not None and odo is None:
                 raise ConfigError(f"fusion table: {where}.within_m needs odometry_m")
-            then = d.get("then_m", 0.0)
-            if isinstance(then, bool) or not isinstance(then, (int, float)) or not 0 <= then < 1e6:
-                raise ConfigError(f"fusion table: {where}.then_m must be a distance in metres")
             return Landmark(
                 "opening",
                 side,
@@ -200,7 +184,6 @@ class Landmark:
                 None if odo is None else float(odo),
                 count=OpeningCount(count),
                 within_m=None if within is None else float(within),
-                then_m=float(then),
             )
         ang = d.get("angle_rad")
         if isinstance(ang, bool) or not isinstance(ang, (int, float)) or not 0 < ang <= 2 * math.pi:

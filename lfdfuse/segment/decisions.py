@@ -137,10 +137,6 @@ class DecisionParams:
     settle_steps: int = 0
     #: ... and asks for at least the largest turn less this (None: the share alone)
     turn_margin_rad: float | None = None
-    #: the robot begins its turn this share of the teacher's travel from the opening's onset to
-    #: the end of its turn after the onset: turning tighter than the teacher (which began early),
-    #: it ends the turn about where the teacher did rather than short of it, at a corner's tip
-    then_share: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -163,7 +159,6 @@ class DecisionPoint:
     begin: int = -1
     cue: OpeningCue = OpeningCue.ALL  # how the opening is recognised
     within_m: float | None = None  # DISTANCE: the tolerance on ``odometry_m``
-    then_m: float = 0.0  # the turn begins this far after the opening's onset
 
 
 def _largest_rise(x: np.ndarray) -> float:
@@ -221,15 +216,6 @@ def _corner(track: LandmarkTrack, side: int, d: int, p: DecisionParams) -> bool:
         track.ranges_m[lo:hi], track.geometry, track.params, offset_rad=-track.held_rad[lo:hi]
     )
     return not bool(flags[:, 1 - side].any())
-
-
-def _then(track: LandmarkTrack, d: int, end: int, at_start: bool, p: DecisionParams) -> float:
-    """How far past the opening's onset the robot begins its turn: at a T (the way ahead closed)
-    ``then_share`` of the teacher's travel through its turn, so a robot turning tighter than the
-    teacher does not end its turn at the tip of the corner it turns round; elsewhere at once."""
-    if at_start or not _closed_ahead(track, d, p):
-        return 0.0
-    return p.then_share * float(track.step_m[d + 1 : end + 1].sum())
 
 
 def _runs(mask: np.ndarray, sign: np.ndarray, max_gap: int) -> list[tuple[int, int, float]]:
@@ -336,7 +322,6 @@ def find_decisions(
                     begin,
                     OpeningCue(p.landmark),
                     within,
-                    _then(track, d, end, at_start, p),
                 )
             )
             since = end
