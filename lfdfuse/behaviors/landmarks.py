@@ -67,6 +67,24 @@ class OpeningParams:
     corridor_back_m: float = 1.0
     corridor_ahead_m: float = 0.5
     corridor_beam_rad: float = math.radians(10.0)
+    #: the way ahead (along the held heading, the beams within ``ahead_beam_rad`` of it) is
+    #: open past this; closed nearer, an opening is a corner or the T at a corridor's end
+    ahead_open_m: float = 4.0
+    ahead_beam_rad: float = math.radians(10.0)
+
+
+def ahead_range(
+    ranges_m: np.ndarray, geometry: ScanGeometry, params: OpeningParams, *, offset_rad: float = 0.0
+) -> float:
+    """How far the way ahead is open (m) in a scan ``(B,)``: the median of the beams within
+    ``ahead_beam_rad`` of the heading ``offset_rad`` from the robot's (+ = left; the sectors'
+    held heading); a beam with no return reaches far. Inf for a scanner that does not look there."""
+    a = geometry.angles - offset_rad
+    a = np.arctan2(np.sin(a), np.cos(a))
+    r = np.asarray(ranges_m, dtype=np.float64)[np.abs(a) <= params.ahead_beam_rad]
+    if not len(r):
+        return math.inf
+    return float(np.median(np.where(np.isfinite(r) & (r > 0.0), r, np.inf)))
 
 
 def side_openings(
@@ -154,6 +172,8 @@ class OpeningSensor:
         self.holding = False
         #: how far the robot has turned (rad, + = left) from the heading the sectors are held at
         self.held_turn_rad = 0.0
+        #: how far the way ahead, along the held heading, is open (m) at this tick
+        self.ahead_m = math.inf
 
     def update(self, ranges_m: np.ndarray, step_m: float, turn_rad: float) -> tuple[bool, bool]:
         """Onsets at this tick from its scan ``(B,)`` and odometry increment (m, rad)."""
@@ -180,6 +200,7 @@ class OpeningSensor:
         )[0]
         if self.holding and self._spinning():
             flags = np.zeros(2, dtype=bool)
+        self.ahead_m = ahead_range(ranges, self.geometry, self.params, offset_rad=held - self._heading)
         return self.tracker.update(flags, held_turn)
 
     def _in_corridor(self, ranges: np.ndarray) -> bool:

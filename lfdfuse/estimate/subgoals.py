@@ -24,7 +24,7 @@ from lfdfuse.errors import LogError
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_segments, run_rng
 from lfdfuse.estimate.replay import fused_vectors
 from lfdfuse.log.reader import Run
-from lfdfuse.network.landmarks import Landmark, OpeningCount
+from lfdfuse.network.landmarks import Ahead, Landmark, OpeningCount
 from lfdfuse.network.table import FusionTable, Network, Step
 from lfdfuse.segment.decisions import (
     DecisionParams,
@@ -106,6 +106,11 @@ def refine(
                             d.odometry_m,
                             count=OpeningCount.PASSED if d.cue == OpeningCue.PASSED else OpeningCount.ALL,
                             within_m=d.within_m,
+                            ahead=None
+                            if d.ahead_open is None
+                            else Ahead.OPEN
+                            if d.ahead_open
+                            else Ahead.CLOSED,
                         ),
                     )
                 )

@@ -163,7 +163,8 @@ class NetworkDriver:
             turn = math.atan2(math.sin(p.theta - th), math.cos(p.theta - th))
         self._odom = (p.x, p.y, p.theta)
         left, right = self.openings.update(observation.reading.ranges_m, step_m, turn)
-        return Cues(left, right, step_m, turn, self.openings.held_turn_rad)
+        ahead_open = self.openings.ahead_m >= self.openings.params.ahead_open_m
+        return Cues(left, right, step_m, turn, self.openings.held_turn_rad, ahead_open)
 
     def _ask(self, dec: Decision, t_ns: int) -> None:
         """Raise a :class:`HelpRequest` when a condition that needs help begins."""

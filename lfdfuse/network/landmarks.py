@@ -43,6 +43,7 @@ class Cues:
     step_m: float = 0.0
     turn_rad: float = 0.0  # + = left
     held_turn_rad: float = 0.0  # turned since the heading the opening sectors are held at
+    ahead_open: bool = True  # the way ahead, along that held heading, is open
 
 
 @dataclass
@@ -53,6 +54,7 @@ class Progress:
     travelled_m: float = 0.0
     turned_rad: float = 0.0
     onset: tuple[bool, bool] = (False, False)  # at this tick
+    ahead_open: bool = True  # at this tick
     #: openings passed by (not turned into) on each side before this tick
     passed: PassedCounter = field(default_factory=PassedCounter)
 
@@ -63,11 +65,21 @@ class Progress:
 
     def add(self, cues: Cues) -> None:
         self.onset = (cues.onset_left, cues.onset_right)
+        self.ahead_open = cues.ahead_open
         self.openings[0] += cues.onset_left
         self.openings[1] += cues.onset_right
         self.travelled_m += cues.step_m
         self.turned_rad += cues.turn_rad
         self.passed.update(self.onset, cues.step_m, cues.turn_rad, cues.held_turn_rad)
+
+
+class Ahead(StrEnum):
+    """The opening's shape, as the way ahead is at its onset."""
+
+    #: the corridor goes on: a side opening, a junction
+    OPEN = "open"
+    #: it ends: a corner, or the T at the end of a corridor (or a dead end)
+    CLOSED = "closed"
 
 
 class OpeningCount(StrEnum):
@@ -89,6 +101,8 @@ class Landmark:
     odometry_m: float | None = None
     angle_rad: float = 0.0
     count: OpeningCount = OpeningCount.ALL
+    #: only an opening of this shape is the one (None: any)
+    ahead: Ahead | None = None
     #: met at the first opening on the side once ``odometry_m − within_m`` has been driven (nth unused)
     within_m: float | None = None
     #: an opening matches only after this share of ``odometry_m`` has been driven
@@ -105,6 +119,8 @@ class Landmark:
         """This tick's onset on side ``s`` is the step's opening."""
         if not p.onset[s]:
             return False
+        if self.ahead is not None and p.ahead_open != (self.ahead == Ahead.OPEN):
+            return False
         if self.within_m is not None and self.odometry_m is not None:
             return p.travelled_m >= self.odometry_m - self.within_m
         far_enough = self.odometry_m is None or p.travelled_m >= self.ODOMETRY_SHARE * self.odometry_m
@@ -118,11 +134,15 @@ class Landmark:
             odo = (
                 f" (the teacher met it after {self.odometry_m:.1f} m)" if self.odometry_m is not None else ""
             )
+            shape = {None: "opening", Ahead.OPEN: "side opening", Ahead.CLOSED: "opening where the way ends"}
+            what = shape[self.ahead]
             if self.within_m is not None and self.odometry_m is not None:
-                return f"the first opening on the {self.side} after {self.odometry_m:.1f} ± {self.within_m:.1f} m"
+                return (
+                    f"the first {what} on the {self.side} after {self.odometry_m:.1f} ± {self.within_m:.1f} m"
+                )
             nth = {1: "1st", 2: "2nd", 3: "3rd"}.get(self.nth, f"{self.nth}th")
             passed = " (counting those passed by)" if self.count == OpeningCount.PASSED else ""
-            return f"the {nth} opening on the {self.side}{passed}{odo}"
+            return f"the {nth} {what} on the {self.side}{passed}{odo}"
         return f"turned {math.degrees(self.angle_rad):.0f}° to the {self.side}"
 
     def to_dict(self) -> dict[str, Any]:
@@ -132,6 +152,8 @@ class Landmark:
                 d["odometry_m"] = round(self.odometry_m, 2)
             if self.count != OpeningCount.ALL:
                 d["count"] = str(self.count)
+            if self.ahead is not None:
+                d["ahead"] = str(self.ahead)
             if self.within_m is not None:
                 d["within_m"] = round(self.within_m, 2)
             return d
@@ -146,7 +168,7 @@ class Landmark:
             raise ConfigError(f"fusion table: {where}: give exactly one of 'opening' or 'turned'")
         kind = kinds[0]
         allowed = (
-            {"opening", "nth", "odometry_m", "count", "within_m"}
+            {"opening", "nth", "odometry_m", "count", "within_m", "ahead"}
             if kind == "opening"
             else {"turned", "angle_rad"}
         )
@@ -175,6 +197,9 @@ class Landmark:
                 isinstance(within, bool) or not isinstance(within, (int, float)) or not 0 <= within < 1e6
             ):
                 raise ConfigError(f"fusion table: {where}.within_m must be a distance in metres")
+            ahead = d.get("ahead")
+            if ahead is not None and ahead not in set(Ahead):
+                raise ConfigError(f"fusion table: {where}.ahead must be 'open' or 'closed'")
             if within is not None and odo is None:
                 raise ConfigError(f"fusion table: {where}.within_m needs odometry_m")
             return Landmark(
@@ -183,6 +208,7 @@ class Landmark:
                 nth,
                 None if odo is None else float(odo),
                 count=OpeningCount(count),
+                ahead=None if ahead is None else Ahead(ahead),
                 within_m=None if within is None else float(within),
             )
         ang = d.get("angle_rad")

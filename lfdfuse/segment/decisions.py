@@ -27,6 +27,7 @@ from lfdfuse.behaviors.landmarks import (
     SIDES,
     OpeningParams,
     PassParams,
+    ahead_range,
     odometry_increments,
     passed_before,
     sensed_onsets,
@@ -128,10 +129,11 @@ class DecisionParams:
     #: the previous onset on that side, at least ``within_min_m``
     within_share: float = 0.5
     within_min_m: float = 1.0
-    #: a turn into a corner (the way ahead closed within this, at the opening's onset, and the
-    #: other side closed) is no decision: there was no other way. None: corners count
-    corner_ahead_m: float | None = None
-    corner_beam_rad: float = math.radians(10.0)
+    #: a turn into a corner (the way ahead closed at the opening's onset, and the other side
+    #: closed) is no decision: there was no other way
+    skip_corners: bool = False
+    #: the landmark names the opening's shape (the way ahead open or closed at its onset)
+    shape: bool = False
     corner_other_steps: int = 25  # the other side open this many steps either side of the onset: a T
     #: the turn landmark looks at the teacher's turn this many steps past the onset at least ...
     settle_steps: int = 0
@@ -159,6 +161,7 @@ class DecisionPoint:
     begin: int = -1
     cue: OpeningCue = OpeningCue.ALL  # how the opening is recognised
     within_m: float | None = None  # DISTANCE: the tolerance on ``odometry_m``
+    ahead_open: bool | None = None  # the opening's shape, when the landmark names it
 
 
 def _largest_rise(x: np.ndarray) -> float:
@@ -192,24 +195,17 @@ def _within(track: LandmarkTrack, side: int, since: int, d: int, odo: float, p: 
     return max(tol, p.within_min_m)
 
 
-def _ahead_m(track: LandmarkTrack, d: int, p: DecisionParams) -> float:
-    """How far the way ahead is open at step ``d``, along the held heading (median of the
-    beams within ``corner_beam_rad`` of it; inf without such beams)."""
-    a = np.arctan2(np.sin(track.geometry.angles), np.cos(track.geometry.angles))
-    rel = np.arctan2(np.sin(a + track.held_rad[d]), np.cos(a + track.held_rad[d]))
-    r = np.where(np.isfinite(track.ranges_m[d]) & (track.ranges_m[d] > 0), track.ranges_m[d], np.inf)
-    front = r[np.abs(rel) <= p.corner_beam_rad]
-    return float(np.median(front)) if len(front) else math.inf
-
-
-def _closed_ahead(track: LandmarkTrack, d: int, p: DecisionParams) -> bool:
-    return p.corner_ahead_m is not None and _ahead_m(track, d, p) < p.corner_ahead_m
+def open_ahead(track: LandmarkTrack, d: int) -> bool:
+    """At step ``d`` the way ahead, along the heading the sectors are held at, is open
+    (:func:`ahead_range`, as the live sensor measures it)."""
+    ahead = ahead_range(track.ranges_m[d], track.geometry, track.params, offset_rad=-track.held_rad[d])
+    return ahead >= track.params.ahead_open_m
 
 
 def _corner(track: LandmarkTrack, side: int, d: int, p: DecisionParams) -> bool:
-    """At onset ``d``: the way ahead (from the held heading) closed within ``corner_ahead_m``
-    and the other side closed around it — a corner, not a junction or a T."""
-    if not _closed_ahead(track, d, p):
+    """At onset ``d``: the way ahead closed and the other side closed around it — a corner, not
+    a junction or a T."""
+    if open_ahead(track, d):
         return False
     lo, hi = max(d - p.corner_other_steps, 0), min(d + p.corner_other_steps + 1, len(track.held_rad))
     flags = side_openings(
@@ -280,7 +276,7 @@ def find_decisions(
                 continue  # no opening the robot could recognise: not expressible as a landmark
             odo = float(track.step_m[since : d + 1].sum())
             at_start = odo < p.at_start_m
-            if not at_start and p.corner_ahead_m is not None and _corner(track, s, d, p):
+            if not at_start and p.skip_corners and _corner(track, s, d, p):
                 continue  # a corner: the teacher turned where there was no other way
             nth = _order(track, s, since, d, p)
             within = _within(track, s, since, d, odo, p) if p.landmark == OpeningCue.DISTANCE else None
@@ -322,6 +318,7 @@ def find_decisions(
                     begin,
                     OpeningCue(p.landmark),
                     within,
+                    open_ahead(track, d) if p.shape and not at_start else None,
                 )
             )
             since = end
