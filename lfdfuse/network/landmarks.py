@@ -1,4 +1,4 @@
-"""Sub-goals at decision points: landmark postconditions of a fusion step (issue 15).
+"""Sub-goals at decision points: landmark postconditions of a fusion step (issues 15, 21).
 
 A person turns into a side corridor because they know the goal is there, long before the
 camera sees it. The learned network reproduces that turn with two extra fusion steps inside
@@ -6,13 +6,22 @@ the goal's step: *drive on to the n-th opening on a side* (the style's weights) 
 it* (the weights the teacher turned with), each ended by a landmark the robot recognises from
 its own sensors — never map coordinates:
 
-``{opening: left, nth: 1, odometry_m: 7.9}``
-    met at the onset of the ``nth`` (or a later) opening on the left since the step began, once
-    the robot has driven at least half of ``odometry_m`` (how far the teacher had driven by
-    then). The order of openings is what carries over to another building; the distance only
-    keeps an opening counted too early (a flicker, a corner taken wide) from triggering the
-    turn-off far before the place — half of it, since distances change from building to
-    building;
+``{opening: left, nth: 2, odometry_m: 23.7, count: passed, ahead: open}``
+    met at the onset of an opening on the left since the step began, once the robot has driven
+    at least half of ``odometry_m`` (how far the teacher had driven by then; half, since
+    distances change from building to building), that is
+
+    - of the opening's *shape* ``ahead`` when given: the way ahead (along the heading the
+      sectors are held at) still ``open`` — a side opening, a junction — or ``closed`` — a
+      corner, the T at the end of a corridor. A corner the route turns round is never the
+      side opening a teacher turned into;
+    - the ``nth`` (or a later one) by ``count``: ``all`` onsets on that side (issue 15, and
+      what a table without ``count`` means), or only the openings ``passed`` by, not turned
+      into (:class:`lfdfuse.behaviors.landmarks.PassedCounter`). Corners met while turning
+      come and go with the line each driver takes; counted, they made the robot take the
+      opening before or after the teacher's from another start (issue 21);
+    - or, with ``within_m``, the first one once ``odometry_m − within_m`` has been driven,
+      whatever came before (an alternative measured in issue 21, not written by ``estimate``);
 ``{turned: left, angle_rad: 1.2}``
     met once the robot has turned that far toward that side from its heading before the turn:
     the heading the opening sectors were held at when the step began (a robot that meets the

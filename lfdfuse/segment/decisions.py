@@ -1,13 +1,17 @@
-"""Decision points: where the teacher left the route the learned fusion would have taken (issue 15).
+"""Decision points: where the teacher left the route the learned fusion would have taken (issues 15, 21).
 
 A goal segment's fusion weights reproduce *how* the teacher steered; they cannot know *where*
 the teacher turned off toward a goal still out of view. A decision point is found by replaying
 the segment's learned fusion over the demo: a run of steps where the demonstrated heading
 leaves the fused heading by more than ``divergence_rad`` to one side, while the teacher really
-turns that way, at an opening on that side. Each decision splits the goal segment into
+turns that way (from any heading it held before: a turn right after a corner left), at an
+opening on that side that is no corner (with ``skip_corners``: the way ahead closed and the
+other side too — there was no other way to go). Each decision splits the goal segment into
 *drive on to the n-th opening on that side* | *turn into it* | *the rest*, with landmarks the
-robot recognises from its own sensors (:mod:`lfdfuse.behaviors.landmarks`): the order of the
-opening among those on that side since the sub-segment began, and the heading change.
+robot recognises from its own sensors (:mod:`lfdfuse.behaviors.landmarks`): the opening's
+side, shape and order (:class:`OpeningCue`), and the heading change — this share of the
+teacher's whole turn, and no less than it less ``turn_margin_rad`` (a turn ended short leaves
+the robot at the tip of the corner it turns round).
 
 Step ``d`` (the opening's onset) is where the robot begins the turn, step ``e`` (the turn
 landmark met) the first step after it, exactly as the runtime switches steps. The turn's

@@ -13,6 +13,7 @@ from lfdfuse.behaviors.landmarks import (
     OpeningTracker,
     PassedCounter,
     PassParams,
+    ahead_range,
     odometry_increments,
     opening_onsets,
     passed_before,
@@ -159,3 +160,15 @@ def test_the_counter_over_a_log_is_the_counter_tick_by_tick() -> None:
     for i in range(n):
         c.update((bool(onsets[i, 0]), bool(onsets[i, 1])), float(step[i]), float(turn[i]), float(held[i]))
         assert tuple(before[i]) == c.before and tuple(new[i]) == c.new
+
+
+def test_the_way_ahead_is_measured_along_the_held_heading() -> None:
+    params = OpeningParams()
+    r = np.full(GEOM.count, 8.0)
+    r[np.abs(GEOM.angles) <= math.radians(12)] = 2.0  # a wall 2 m straight ahead
+    assert ahead_range(r, GEOM, params) == 2.0
+    assert ahead_range(r, GEOM, params, offset_rad=math.radians(45)) == 8.0  # held 45° to the left
+    r[np.abs(GEOM.angles) <= math.radians(12)] = np.inf  # no return: far
+    assert ahead_range(r, GEOM, params) == math.inf
+    behind = ScanGeometry(math.pi / 2, math.pi / 180, 181, 8.0)  # a scanner that does not look ahead
+    assert ahead_range(np.full(181, 1.0), behind, params) == math.inf

@@ -19,7 +19,7 @@ import yaml
 from lfdfuse.behaviors.landmarks import OpeningParams, OpeningSensor, opening_onsets, side_openings
 from lfdfuse.errors import ConfigError
 from lfdfuse.evaluate.offroute import CASES, demonstrate, learn_case, perturbed_starts, run_starts
-from lfdfuse.network.landmarks import Cues, Landmark, Progress
+from lfdfuse.network.landmarks import Ahead, Cues, Landmark, Progress
 from lfdfuse.network.runtime import NetworkRuntime
 from lfdfuse.network.table import dump_table, parse_table
 from lfdfuse.sim.sensors import LaserParams
@@ -65,6 +65,7 @@ def _table(landmark: dict) -> dict:  # type: ignore[type-arg]
         {"opening": "left", "nth": 2, "odometry_m": 7.9},
         {"opening": "left", "nth": 2, "odometry_m": 7.9, "count": "passed"},
         {"opening": "left", "nth": 2, "odometry_m": 7.9, "within_m": 2.5},
+        {"opening": "left", "nth": 2, "odometry_m": 7.9, "count": "passed", "ahead": "open"},
     ],
 )
 def test_landmark_steps_round_trip_and_match_the_schema(landmark: dict[str, Any]) -> None:
@@ -76,10 +77,21 @@ def test_landmark_steps_round_trip_and_match_the_schema(landmark: dict[str, Any]
     assert parse_table(again) == table
     inner = table.network.steps[0].network
     assert inner is not None and inner.steps[0].landmark == Landmark(
-        "opening", "left", 2, 7.9, count=landmark.get("count", "all"), within_m=landmark.get("within_m")
+        "opening",
+        "left",
+        2,
+        7.9,
+        count=landmark.get("count", "all"),
+        within_m=landmark.get("within_m"),
+        ahead=landmark.get("ahead"),
     )
     said = inner.steps[0].landmark.describe()
-    assert ("7.9 ± 2.5 m" in said) if "within_m" in landmark else ("2nd opening on the left" in said)
+    if "within_m" in landmark:
+        assert "7.9 ± 2.5 m" in said
+    elif "ahead" in landmark:
+        assert "2nd side opening on the left" in said
+    else:
+        assert "2nd opening on the left" in said
 
 
 @pytest.mark.parametrize(
@@ -91,6 +103,7 @@ def test_landmark_steps_round_trip_and_match_the_schema(landmark: dict[str, Any]
         {"turned": "left", "angle_rad": -1},
         {"opening": "left", "colour": "red"},
         {"opening": "left", "count": "some"},
+        {"opening": "left", "ahead": "ajar"},
         {"opening": "left", "within_m": 2.0},
         {"opening": "left", "odometry_m": 9.0, "within_m": -1.0},
         "left",
@@ -167,6 +180,17 @@ def test_a_distance_landmark_is_met_at_the_first_opening_on_its_side_past_the_wi
     assert not lm.met(p)  # the other side
     p.add(Cues(onset_left=True, step_m=0.1))
     assert lm.met(p)  # the second left onset, but within the window: nth is not used
+
+
+def test_a_landmark_with_a_shape_is_met_only_at_an_opening_of_that_shape() -> None:
+    side = Landmark("opening", "left", ahead=Ahead.OPEN)
+    end = Landmark("opening", "left", ahead=Ahead.CLOSED)
+    p = Progress.fresh()
+    p.add(Cues(onset_left=True, step_m=0.1, ahead_open=False))  # a corner, or a T
+    assert not side.met(p) and end.met(p)
+    p.add(Cues(onset_left=True, step_m=0.1, ahead_open=True))  # the corridor goes on
+    assert side.met(p) and not end.met(p)
+    assert Landmark("opening", "left").met(p)  # no shape: any
 
 
 def test_a_passed_count_ignores_openings_turned_into() -> None:
