@@ -29,8 +29,9 @@ demo: install
 	@echo "Open $(DEMO)/*-run.mcap in Foxglove or Lichtblick: map, robot, laser and the fusion arrows (/lfd/overlay)."
 	$(PY) -m lfdfuse.tools.demo_check $(DEMO)
 
+# on every core (pytest-xdist; work stealing, so one long closed loop does not hold the rest back)
 test: install
-	$(PY) -m pytest
+	$(PY) -m pytest -n auto --dist worksteal
 
 # the whole hostile corpus (tests/hostile; make test runs a sample of every class)
 fuzz: install

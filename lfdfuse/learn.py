@@ -3,7 +3,8 @@
 :func:`learn` is the one path from segmented demonstrations to a :class:`FusionTable` that
 ``lfdfuse estimate``, the paper's experiments, the benches, the round trips and the tests call:
 several demos are pooled into one table (:func:`lfdfuse.estimate.pipeline.estimate_runs`); each
-demo is read once (its ``/lfd/*`` channels, and with sub-goals its ``/scan`` and ``/pose``),
+demo is read in one pass over its messages (its ``/lfd/*`` channels, and with sub-goals its
+``/scan`` and ``/pose`` too: :func:`lfdfuse.segment.read.read_segmented_and_run`),
 estimated once (:func:`lfdfuse.estimate.pipeline.estimate_run`), and with ``subgoals`` the table
 is refined at the demo's decision points (:func:`lfdfuse.estimate.subgoals.refine`), which
 estimates only the new sub-segment rows. :func:`learn_run` is the same on a run in memory.
@@ -15,7 +16,7 @@ network teacher) demonstrates in a world, and the demo is segmented.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -23,11 +24,11 @@ from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run, estimate_runs
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.run import ExecuteOptions, drive_table
-from lfdfuse.log.reader import read_run
 from lfdfuse.network.table import FusionTable
+from lfdfuse.progress import Progress, part
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, LandmarkTrack
 from lfdfuse.segment.pipeline import segment_file
-from lfdfuse.segment.read import SegmentedRun, read_segmented
+from lfdfuse.segment.read import SegmentedRun, read_segmented, read_segmented_and_run
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import Leg
@@ -60,15 +61,23 @@ def learn_run(
     options: LearnOptions = LearnOptions(),
     track: LandmarkTrack | None = None,
     name: str = "demo",
-    progress: Callable[[float, float], None] | None = None,
+    progress: Progress | None = None,
 ) -> LearnResult:
-    """The table of a segmented run in memory; ``track`` (its landmark cues) is needed for sub-goals."""
-    table, groups, skipped = estimate_run(run, opts=options.estimate, name=name, progress=progress)
+    """The table of a segmented run in memory; ``track`` (its landmark cues) is needed for sub-goals.
+
+    ``progress`` is told how far learning is, many times over a long estimate. With sub-goals
+    the first pass is the first half: the refinement estimates the decided segments again, at
+    most as much work again (where the decisions are is known only after the first pass).
+    """
+    if options.subgoals and track is None:
+        raise ConfigError("sub-goals need the demo's landmark track (its /scan and /pose)")
+    share = 0.5 if options.subgoals else 1.0
+    first = part(progress, start=0.0, size=share, total=1.0)
+    table, groups, skipped = estimate_run(run, opts=options.estimate, name=name, progress=first)
     decisions: tuple[DecisionPoint, ...] = ()
-    if options.subgoals:
-        if track is None:
-            raise ConfigError("sub-goals need the demo's landmark track (its /scan and /pose)")
-        res = refine(table, run, track, opts=options.estimate, params=options.decisions)
+    if options.subgoals and track is not None:
+        then = part(progress, start=share, size=1.0 - share, total=1.0)
+        res = refine(table, run, track, opts=options.estimate, params=options.decisions, progress=then)
         table, decisions = res.table, res.decisions
     return LearnResult(table, groups, skipped, decisions, (name,))
 
@@ -77,7 +86,7 @@ def learn(
     demos: Sequence[str | Path],
     *,
     options: LearnOptions = LearnOptions(),
-    progress: Callable[[float, float], None] | None = None,
+    progress: Progress | None = None,
 ) -> LearnResult:
     """The fusion table of segmented demo logs, pooled (:mod:`lfdfuse.estimate.pool`): a row's
     likelihood is the product over the demos that met its (step, BAC); each demo keeps its own
@@ -87,9 +96,13 @@ def learn(
         raise ConfigError("learning needs at least one demonstration")
     if len(demos) == 1:
         src = demos[0]
-        run = read_segmented(src)
         name = Path(src).name
-        track = track_of(read_run(src), run, source=str(src)) if options.subgoals else None
+        track: LandmarkTrack | None = None
+        if options.subgoals:
+            run, raw = read_segmented_and_run(src)
+            track = track_of(raw, run, source=str(src))
+        else:
+            run = read_segmented(src)
         return learn_run(run, options=options, track=track, name=name, progress=progress)
     if options.subgoals:
         raise ConfigError(
@@ -133,14 +146,16 @@ def demonstrate(
     start: tuple[float, float, float] | None = None,
     behaviors: str | None = None,
     measure_lag: bool = True,
+    keys_period_s: float | None = None,
 ) -> Demonstration:
     """Demonstrate in ``world`` and segment: ``folder/name.mcap`` and ``folder/name.seg.mcap``
     (``folder`` is created).
 
     ``teacher`` is a task's legs (the scripted style teacher, ``simulate --teacher``, named
     ``teacher_name`` in the log) or a fusion table (the network teacher, ``simulate --teacher
-    TABLE``, with ``heading_noise_rad``). ``behaviors`` (default: the segment preset, or the
-    table's behaviours) and ``measure_lag`` are ``segment``'s.
+    TABLE``, with ``heading_noise_rad``); ``keys_period_s`` makes a task's teacher a person at a
+    keyboard (``simulate --keys``). ``behaviors`` (default: the segment preset, or the table's
+    behaviours) and ``measure_lag`` are ``segment``'s.
     """
     folder.mkdir(parents=True, exist_ok=True)
     raw, seg = folder / f"{name}.mcap", folder / f"{name}.seg.mcap"
@@ -166,6 +181,7 @@ def demonstrate(
                 duration_s=duration_s,
                 seed=seed,
                 start=pose,
+                keys_period_s=keys_period_s,
             ),
             out=raw,
         )

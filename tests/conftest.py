@@ -9,6 +9,9 @@ from typing import Any
 
 import pytest
 
+# before any test module imports numpy: lfdfuse sets one BLAS thread per process (see its __init__)
+import lfdfuse  # noqa: F401
+
 ROOT = Path(__file__).resolve().parents[1]
 # the shared folder beside the checkout (real data, mcap-check); LFDFUSE_SHARED overrides it
 SHARED = Path(os.environ.get("LFDFUSE_SHARED", ROOT.parent / "shared"))

@@ -6,6 +6,7 @@ from typing import Any
 
 from rich.table import Table
 
+from lfdfuse.behaviors.names import abbreviation, legend_entry
 from lfdfuse.cli.common import console
 from lfdfuse.estimate.methods import EstimateOptions
 from lfdfuse.execute.report import help_line, verdict
@@ -38,29 +39,9 @@ def print_segments(segm: Segmentation, names: tuple[str, ...], dt: float) -> Non
         console.print("    BAC (samples): " + ", ".join(cells))
 
 
-_SHORT = {
-    "avoid": "av",
-    "wander": "w",
-    "wander_left": "wL",
-    "wander_right": "wR",
-    "wall_attract": "a",
-    "wall_attract_left": "aL",
-    "wall_attract_right": "aR",
-    "sonar_avoid": "son",
-    "wall_side_left": "sL",
-    "wall_side_right": "sR",
-    "circular_avoid_left": "cL",
-    "circular_avoid_right": "cR",
-}
-
-
-def _abbrev(name: str) -> str:
-    return _SHORT.get(name, name.replace("attract_", ""))
-
-
 def bac_names(bac: int, names: tuple[str, ...] | list[str]) -> str:
     """A BAC in words: the abbreviations of its applicable behaviours (bit i ⇔ ``names[i]``), ``+``-joined."""
-    on = [_abbrev(n) for i, n in enumerate(names) if int(bac) >> i & 1]
+    on = [abbreviation(n) for i, n in enumerate(names) if int(bac) >> i & 1]
     return "+".join(on) or "none"
 
 
@@ -91,7 +72,7 @@ def print_provenance(table: FusionTable) -> None:
 
 def print_table(table: FusionTable) -> None:
     """Weights (± std), samples and fit error per step and BAC, in percent to fit a terminal."""
-    legend = ", ".join(f"{_abbrev(b)}={b}" for b in table.behaviors)
+    legend = ", ".join(legend_entry(b) for b in table.behaviors)
     by = table.estimated_by
     # a least-squares fit has no uncertainty: its std is 0 by construction unless bootstrapped
     show_std = not (by.get("method") in _POINT_FITS and int(by.get("trials", 1)) == 1)
@@ -120,7 +101,7 @@ def print_table(table: FusionTable) -> None:
             t.add_column("n", justify="right")
             t.add_column("fit°", justify="right")
             for b in table.behaviors:
-                t.add_column(_abbrev(b), justify="right")
+                t.add_column(abbreviation(b), justify="right")
             for row in sorted(step.fusion, key=lambda r: -(r.samples or 0)):
                 cells = []
                 for b in table.behaviors:
@@ -185,9 +166,9 @@ def print_changes(table: FusionTable) -> None:
     for name, r in rows:
         before = r.weights_before or {}
         moves = ", ".join(
-            f"{_abbrev(b)} {100 * before[b]:.0f}→{100 * w:.0f}"
+            f"{abbreviation(b)} {100 * before[b]:.0f}→{100 * w:.0f}"
             if b in before
-            else f"{_abbrev(b)} {100 * w:.0f}"
+            else f"{abbreviation(b)} {100 * w:.0f}"
             for b, w in r.weights.items()
         )
         what = "new row" if r.weights_before is None else "weights %"

@@ -3,8 +3,9 @@
 ``segment`` records which model a demo needs (metadata ``segment_commands``, see
 :mod:`lfdfuse.segment.commands`); ``estimate --commands`` can force either. For the discrete
 model this module finds, from the demonstrated headings alone (each command stands for one
-heading under the drive mapping), the command set (:class:`~lfdfuse.estimate.model.CommandBins`)
-and the decision steps: see :mod:`lfdfuse.estimate.model` for the model itself.
+heading under the drive mapping), the command set (:class:`~lfdfuse.estimate.model.CommandBins`),
+the decision steps and the heading interval each step observes (its command's bin, or at a nudge
+the interval between two commands): see :mod:`lfdfuse.estimate.model` for the model itself.
 """
 
 from __future__ import annotations
@@ -25,11 +26,13 @@ SAME_HEADING_RAD = 1e-6
 
 @dataclass(frozen=True)
 class Commands:
-    """A demo's command model; for ``discrete`` its command set and decision steps ``(N,)``."""
+    """A demo's command model; for ``discrete`` its command set, decision steps ``(N,)`` and the
+    heading interval each step observes ``bounds (N, 2)`` (rad, see :func:`observed_bounds`)."""
 
     mode: Literal["continuous", "discrete"]
     bins: CommandBins | None = None
     decisions: np.ndarray | None = None  # steps where the person decided (informative or not)
+    bounds: np.ndarray | None = None
 
 
 def headings_of(run: SegmentedRun) -> np.ndarray:
@@ -64,14 +67,51 @@ def decision_steps(run: SegmentedRun, *, recheck_s: float | None) -> np.ndarray:
 
 
 def bins_of(run: SegmentedRun) -> CommandBins:
-    """The command set: the distinct demonstrated headings of the informative steps."""
+    """The command set: the distinct demonstrated headings of the informative steps and their
+    mirror images (a keyboard or a teleop panel offers both sides: a person who only turned
+    right still had the left keys, and not pressing them says the fused vector did not point
+    that way)."""
     h = headings_of(run)[run.informative]
     if len(h) == 0:
         raise ConfigError("the demo has no informative command to learn from")
-    return CommandBins.from_headings(np.unique(np.round(h, 9)))
+    return CommandBins.from_headings(np.unique(np.round(h, 9))).mirrored()
 
 
-def commands_of(run: SegmentedRun, *, requested: str = "auto", recheck_s: float | None = 1.0) -> Commands:
+def observed_bounds(run: SegmentedRun, bins: CommandBins, *, nudge_s: float | None) -> np.ndarray:
+    """The heading interval ``(N, 2)`` (rad, ``lo < hi``) each step's command says the person
+    wanted: the bin of the held command, except at a *nudge*.
+
+    A nudge is a press of command ``c`` away from ``c₀`` undone (``c₀`` pressed again) within
+    ``nudge_s``: the person wanted a heading between the two and held ``c`` for part of the
+    time (a tap of an arc key to correct a drift), so the press observes the interval between
+    ``c₀``'s and ``c``'s headings instead of ``c``'s bin. A stop or a reverse on either side is no
+    nudge. Steps without a heading keep the bin of their (meaningless) heading.
+    """
+    h = headings_of(run)
+    out = bins.bounds_of(h)
+    if nudge_s is None:
+        return out
+    inf = run.informative
+    presses = np.nonzero(decision_steps(run, recheck_s=None))[0]
+    within = int(round(nudge_s * 1e9))
+    for before, press, back in zip(
+        presses[:-2].tolist(), presses[1:-1].tolist(), presses[2:].tolist(), strict=True
+    ):
+        if not (inf[before] and inf[press] and inf[back]):
+            continue
+        if abs(h[back] - h[before]) > SAME_HEADING_RAD or run.t_ns[back] - run.t_ns[press] >= within:
+            continue
+        out[press] = sorted((h[before], h[press]))
+    return out
+
+
+def commands_of(
+    run: SegmentedRun,
+    *,
+    requested: str = "auto",
+    recheck_s: float | None = 1.0,
+    nudge_s: float | None = 1.0,
+) -> Commands:
     """The command model of ``run``: ``requested``, else what segment recorded, else detected."""
     if requested not in COMMAND_MODES:
         raise ConfigError(f"--commands must be one of {', '.join(COMMAND_MODES)}, got {requested!r}")
@@ -83,4 +123,10 @@ def commands_of(run: SegmentedRun, *, requested: str = "auto", recheck_s: float 
         mode = "discrete" if distinct <= FEW_COMMANDS else "continuous"
     if mode == "continuous":
         return Commands("continuous")
-    return Commands("discrete", bins_of(run), decision_steps(run, recheck_s=recheck_s))
+    bins = bins_of(run)
+    return Commands(
+        "discrete",
+        bins,
+        decision_steps(run, recheck_s=recheck_s),
+        observed_bounds(run, bins, nudge_s=nudge_s),
+    )

@@ -15,8 +15,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
+from typing import NamedTuple
 
 import numpy as np
 
@@ -27,10 +28,19 @@ from lfdfuse.estimate.model import CommandBins, FusionModel, make_row, row_logli
 from lfdfuse.estimate.paper import Likelihood as LikelihoodName
 from lfdfuse.estimate.paper import PFParams, normalise, run_filter
 from lfdfuse.estimate.smc import SMCParams, TemperedSMC
+from lfdfuse.progress import Progress, part, tell
 from lfdfuse.segment.commands import CommandMode
 
-#: one group's ``(vectors (T, n, 2), demo (T, 2))``
-Problem = tuple[np.ndarray, np.ndarray]
+
+class Problem(NamedTuple):
+    """One group's steps: ``vectors (T, n, 2)``, ``demo (T, 2)`` and, for the discrete command
+    model, the heading interval each step observes ``bounds (T, 2)`` (None: the bin of the
+    demonstrated command; see :func:`~lfdfuse.estimate.model.make_row`). A plain
+    ``(vectors, demo)`` pair is a problem too."""
+
+    vectors: np.ndarray
+    demo: np.ndarray
+    bounds: np.ndarray | None = None
 
 
 class Method(StrEnum):
@@ -82,14 +92,19 @@ class RowEstimate:
     identifiable: bool | None  # pf only: False when the prior decides some direction
 
 
+#: a method's row estimator: ``(problems, options, rng, bins, progress)``; ``bins`` the discrete
+#: command model's command set or None; ``progress`` told ``(done, total)`` as rows are sampled
+RowsFn = Callable[
+    [Sequence[Problem], EstimateOptions, np.random.Generator, CommandBins | None, Progress | None],
+    list[RowEstimate],
+]
+
+
 @dataclass(frozen=True)
 class Estimator:
     """A method's row estimator and the provenance entries it adds to the table."""
 
-    #: ``(problems, options, rng, bins)``: ``bins`` the discrete command model's command set or None
-    rows: Callable[
-        [Sequence[Problem], EstimateOptions, np.random.Generator, CommandBins | None], list[RowEstimate]
-    ]
+    rows: RowsFn
     provenance: Callable[[EstimateOptions, CommandBins | None], dict[str, object]]
 
 
@@ -98,12 +113,18 @@ CHAIN_BATCH = 128
 
 
 def _pf_rows(
-    problems: Sequence[Problem], opts: EstimateOptions, rng: np.random.Generator, bins: CommandBins | None
+    problems: Sequence[Problem],
+    opts: EstimateOptions,
+    rng: np.random.Generator,
+    bins: CommandBins | None,
+    progress: Progress | None,
 ) -> list[RowEstimate]:
-    """One batched SMC pass over every problem with ≥ 2 behaviours and ≥ 1 step."""
+    """One batched SMC pass over every problem with ≥ 2 behaviours and ≥ 1 step; ``progress``
+    in steps sampled (a row's steps × its share of the sampler's pass), every iteration."""
     out: list[RowEstimate | None] = [None] * len(problems)
     todo = []
-    for i, (vec, _demo) in enumerate(problems):
+    for i, p in enumerate(problems):
+        vec = p.vectors
         n = vec.shape[1]
         if n == 1:
             out[i] = RowEstimate(np.ones(1), np.zeros(1), np.zeros(1) if opts.trials > 1 else None, True)
@@ -116,14 +137,25 @@ def _pf_rows(
     # rows are sampled in batches: the sampler's arrays grow with the rows it holds, and an
     # hour-long demo has hundreds of rows (a batch is one pass for any ordinary demo)
     per_pass = max(1, CHAIN_BATCH // k)
+    total = float(sum(problems[i][0].shape[0] for i in todo))
+    done = 0.0
+    tell(progress, 0.0, total)
     for b in range(0, len(todo), per_pass):
         batch = todo[b : b + per_pass]
-        datas = [make_row(*problems[i], bins) for i in batch]
-        smc = TemperedSMC(datas, trials=k, model=opts.model, params=opts.smc, rng=rng)
-        res = smc.run()
+        size = float(sum(problems[i].vectors.shape[0] for i in batch))
+        datas = [make_row(problems[i].vectors, problems[i].demo, bins, problems[i].bounds) for i in batch]
+        params = opts.smc
+        if bins is not None and sum(d.steps for d in datas) <= params.discrete_few:
+            params = replace(params, particles=params.particles * params.discrete_factor)
+        smc = TemperedSMC(datas, trials=k, model=opts.model, params=params, rng=rng)
+        for _ in smc:
+            tell(progress, done + size * smc.progress, total)
+        res = smc.result()
+        done += size
+        tell(progress, done, total)
         means, covs, particles = res.mean(), res.cov(), res.weights
         for j, i in enumerate(batch):
-            n = problems[i][0].shape[1]
+            n = problems[i].vectors.shape[1]
             cov = covs[j * k : (j + 1) * k, :n, :n].mean(axis=0)
             pinned = identifiable(cov, opts.model)
             if pinned:
@@ -151,33 +183,50 @@ def _single(k: int) -> RowEstimate:
 
 
 def _paper_rows(
-    problems: Sequence[Problem], opts: EstimateOptions, rng: np.random.Generator, bins: CommandBins | None
+    problems: Sequence[Problem],
+    opts: EstimateOptions,
+    rng: np.random.Generator,
+    bins: CommandBins | None,
+    progress: Progress | None,
 ) -> list[RowEstimate]:
+    """The published filter per problem; ``progress`` in filter updates."""
     out = []
     k = opts.trials
-    for vectors, demo in problems:
+    # a filter makes max(T, min_updates) updates at least (short groups are passed over again)
+    cost = [
+        0.0 if p.vectors.shape[1] == 1 else float(max(p.vectors.shape[0], opts.pf.min_updates, 1))
+        for p in problems
+    ]
+    total, done = sum(cost), 0.0
+    tell(progress, 0.0, total)
+    for (vectors, demo, _), c in zip(problems, cost, strict=True):
         if vectors.shape[1] == 1:
             out.append(_single(k))
             continue
-        res = run_filter(vectors, demo, trials=k, rng=rng, params=opts.pf)
+        sub = part(progress, start=done, size=c, total=total)
+        res = run_filter(vectors, demo, trials=k, rng=rng, params=opts.pf, progress=sub)
+        done += c
         spread = res.weights.std(axis=0) if k > 1 else None
         out.append(RowEstimate(normalise(res.weights.mean(axis=0)), res.spread.mean(axis=0), spread, None))
     return out
 
 
-def _fit_rows(
-    fit: Callable[[np.ndarray, np.ndarray], np.ndarray],
-) -> Callable[
-    [Sequence[Problem], EstimateOptions, np.random.Generator, CommandBins | None], list[RowEstimate]
-]:
-    """A heading fit per problem; ``trials > 1``: the mean and spread of bootstrap fits."""
+def _fit_rows(fit: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> RowsFn:
+    """A heading fit per problem; ``trials > 1``: the mean and spread of bootstrap fits;
+    ``progress`` in steps fitted, per row."""
 
     def rows(
-        problems: Sequence[Problem], opts: EstimateOptions, rng: np.random.Generator, bins: CommandBins | None
+        problems: Sequence[Problem],
+        opts: EstimateOptions,
+        rng: np.random.Generator,
+        bins: CommandBins | None,
+        progress: Progress | None,
     ) -> list[RowEstimate]:
         out = []
         k = opts.trials
-        for vectors, demo in problems:
+        total, done = float(sum(p.vectors.shape[0] for p in problems)), 0.0
+        tell(progress, 0.0, total)
+        for vectors, demo, _ in problems:
             t, n, _ = vectors.shape
             if n == 1:
                 out.append(_single(k))
@@ -193,6 +242,8 @@ def _fit_rows(
                 out.append(
                     RowEstimate(normalise(boots.mean(axis=0)), boots.std(axis=0), boots.std(axis=0), None)
                 )
+            done += t
+            tell(progress, done, total)
         return out
 
     return rows
@@ -244,15 +295,20 @@ def check_options(opts: EstimateOptions) -> None:
 
 
 def estimate_groups(
-    problems: Sequence[Problem],
+    problems: Sequence[Problem | tuple[np.ndarray, np.ndarray]],
     *,
     opts: EstimateOptions,
     rng: np.random.Generator,
     bins: CommandBins | None = None,
+    progress: Progress | None = None,
 ) -> list[RowEstimate]:
-    """Estimates for groups given as ``(vectors (T, n, 2), demo (T, 2))`` pairs, in order
-    (``bins``: the discrete command model's command set; only ``pf`` models it)."""
-    return estimator(opts.method).rows(problems, opts, rng, bins)
+    """Estimates for groups given as :class:`Problem` s or ``(vectors (T, n, 2), demo (T, 2))``
+    pairs, in order (``bins``: the discrete command model's command set; only ``pf`` models it).
+    ``progress`` is told ``(done, total)`` as the work goes (many times for a long pass), ending
+    at ``total``."""
+    out = estimator(opts.method).rows([Problem(*p) for p in problems], opts, rng, bins, progress)
+    tell(progress, 1.0, 1.0)
+    return out
 
 
 def estimate_group(

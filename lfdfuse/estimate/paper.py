@@ -36,6 +36,7 @@ from typing import Literal
 import numpy as np
 
 from lfdfuse.estimate.resampling import ess, systematic
+from lfdfuse.progress import Progress, tell
 
 Likelihood = Literal["vonmises", "paper"]
 
@@ -126,13 +127,24 @@ def normalise(w: np.ndarray) -> np.ndarray:
     return np.where(tot > 1e-12, w / np.where(tot > 1e-12, tot, 1.0), 1.0 / n)
 
 
+#: updates of the filter between two progress reports
+PROGRESS_EVERY = 25
+
+
 def run_filter(
-    vectors: np.ndarray, demo: np.ndarray, *, trials: int, rng: np.random.Generator, params: PFParams
+    vectors: np.ndarray,
+    demo: np.ndarray,
+    *,
+    trials: int,
+    rng: np.random.Generator,
+    params: PFParams,
+    progress: Progress | None = None,
 ) -> PFResult:
     """Filter one group: ``vectors (T, n, 2)``, ``demo (T, 2)`` → per-trial weights.
 
     The per-step posterior means (normalised to sum 1) after a burn-in are averaged, after
     dropping outlying steps (farther than 3 median absolute deviations from the median).
+    ``progress`` is told ``(updates done, updates)`` every :data:`PROGRESS_EVERY` updates.
     """
     t_count, n, _ = vectors.shape
     k, m = trials, params.particles
@@ -148,6 +160,8 @@ def run_filter(
         u = rng.uniform(0.0, 1.0, k)
         s, logw, mean = step(s, logw, vectors[j], demo[j], noise, u, jitter(params, t), params)
         means[t] = mean
+        if progress is not None and (t + 1) % PROGRESS_EVERY == 0:
+            tell(progress, t + 1.0, float(len(order)))
     kept = normalise(means[int(params.burn_in * len(order)) :])  # (T', K, n)
     med = np.median(kept, axis=0)
     dev = np.abs(kept - med).sum(axis=2)  # (T', K)
@@ -159,6 +173,7 @@ def run_filter(
     ns = normalise(s)
     pmean = (w[:, :, None] * ns).sum(axis=1)
     spread = np.sqrt((w[:, :, None] * (ns - pmean[:, None, :]) ** 2).sum(axis=1))
+    tell(progress, float(len(order)), float(len(order)))
     return PFResult(normalise(wsum), spread, len(order))
 
 

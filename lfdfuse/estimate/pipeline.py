@@ -16,7 +16,7 @@ Reading the log and refining the table with sub-goals are the caller's (:mod:`lf
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -24,10 +24,11 @@ import numpy as np
 
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.baselines import angle_errors
-from lfdfuse.estimate.commands import commands_of
+from lfdfuse.estimate.commands import commands_of, decision_steps, observed_bounds
 from lfdfuse.estimate.methods import (
     EstimateOptions,
     Method,
+    Problem,
     RowEstimate,
     check_options,
     estimate_group,
@@ -47,6 +48,7 @@ from lfdfuse.estimate.pool import (
     same_behaviors,
 )
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step, default_weights_for
+from lfdfuse.progress import Progress, part, tell
 from lfdfuse.segment.read import SegmentedRun
 
 __all__ = [
@@ -140,18 +142,32 @@ class SegmentSteps:
 
 
 def estimate_segments(
-    run: SegmentedRun, *, opts: EstimateOptions, rng: np.random.Generator, table_default: bool = True
+    run: SegmentedRun,
+    *,
+    opts: EstimateOptions,
+    rng: np.random.Generator,
+    table_default: bool = True,
+    progress: Progress | None = None,
 ) -> SegmentSteps:
     """Estimate every group of ``run.segments`` and each segment's default fit (and the table's,
     with ``table_default``) in one pass of the method. A discrete command model (a person at a
-    keyboard) observes each decision once, not each tick it was held (DESIGN §6)."""
+    keyboard) observes each decision once, not each tick it was held (DESIGN §6). ``progress``
+    is told how far the pass is, many times over a long one."""
     check_options(opts)
-    cm = commands_of(run, requested=opts.commands, recheck_s=opts.model.recheck_s)
+    cm = commands_of(run, requested=opts.commands, recheck_s=opts.model.recheck_s, nudge_s=opts.model.nudge_s)
     if cm.decisions is not None:  # discrete: one observation per decision, not per tick
         run = replace(run, informative=run.informative & cm.decisions)
+    bounds = cm.bounds
     groups = groups_of(run)
     live = [g for g in groups if len(g.steps)]
-    problems = [(run.vectors[g.steps][:, list(g.behaviors), :], run.demo[g.steps]) for g in live]
+    problems = [
+        Problem(
+            run.vectors[g.steps][:, list(g.behaviors), :],
+            run.demo[g.steps],
+            None if bounds is None else bounds[g.steps],
+        )
+        for g in live
+    ]
     idx, masks = _default_masks(run, opts, table_default=table_default)
     # a step's default fit over the same steps as the table's is the same fit: do it once
     uniq: list[np.ndarray] = []
@@ -165,10 +181,12 @@ def estimate_segments(
             uniq.append(m)
             hit = len(uniq) - 1
         slot.append(hit)
-    problems += [(run.vectors[s][:, idx, :], run.demo[s]) for s in uniq]
-    est = estimate_groups(problems, opts=opts, rng=rng, bins=cm.bins)
+    problems += [
+        Problem(run.vectors[s][:, idx, :], run.demo[s], None if bounds is None else bounds[s]) for s in uniq
+    ]
+    est = estimate_groups(problems, opts=opts, rng=rng, bins=cm.bins, progress=progress)
     rows: dict[int, list[FusionRow]] = {s.index: [] for s in run.segments}
-    for g, e, (vec, demo) in zip(live, est, problems, strict=False):
+    for g, e, (vec, demo, _) in zip(live, est, problems, strict=False):
         err = float(np.degrees(angle_errors(vec, demo, e.weights).mean()))
         names = [run.names[i] for i in g.behaviors]
         rows[g.segment].append(
@@ -219,6 +237,19 @@ def run_rng(run: SegmentedRun, opts: EstimateOptions) -> np.random.Generator:
     return np.random.default_rng([opts.seed, len(run.t_ns)])
 
 
+def observed(
+    run: SegmentedRun, opts: EstimateOptions, bins: CommandBins | None
+) -> tuple[SegmentedRun, np.ndarray | None]:
+    """``run`` as the rows of a pooled estimate see it: with ``bins`` (a discrete first demo) only
+    its decisions are informative, and each step's observed heading interval ``(N, 2)`` in that
+    command set comes with it; without, the run as it is (every tick, the continuous model)."""
+    if bins is None:
+        return run, None
+    decided = decision_steps(run, recheck_s=opts.model.recheck_s)
+    narrowed = replace(run, informative=run.informative & decided)
+    return narrowed, observed_bounds(run, bins, nudge_s=opts.model.nudge_s)
+
+
 # ------------------------------------------------------------------------------ pooled demos
 
 
@@ -241,11 +272,14 @@ def _row(
     parts: Sequence[tuple[int, np.ndarray]],
     opts: EstimateOptions,
     bins: CommandBins | None,
+    bounds: Sequence[np.ndarray] | None,
+    progress: Progress | None = None,
 ) -> tuple[RowEstimate, float]:
     """One row's estimate on ``parts`` (its own random stream) and its mean heading error (°)."""
-    vec, demo = problem_of(parts, runs, g.behaviors)
-    e = estimate_groups([(vec, demo)], opts=opts, rng=row_rng(opts.seed, ROW, g.step, g.bac), bins=bins)[0]
-    err = float(np.degrees(angle_errors(vec, demo, e.weights).mean()))
+    p = problem_of(parts, runs, g.behaviors, bounds)
+    rng = row_rng(opts.seed, ROW, g.step, g.bac)
+    e = estimate_groups([p], opts=opts, rng=rng, bins=bins, progress=progress)[0]
+    err = float(np.degrees(angle_errors(p.vectors, p.demo, e.weights).mean()))
     return e, err if math.isfinite(err) else 180.0
 
 
@@ -284,7 +318,7 @@ def estimate_pooled(
     runs: Sequence[SegmentedRun],
     *,
     opts: EstimateOptions,
-    progress: Callable[[float, float], None] | None = None,
+    progress: Progress | None = None,
 ) -> PooledSteps:
     """Estimate the rows of one or more demos pooled (:mod:`lfdfuse.estimate.pool`).
 
@@ -296,7 +330,34 @@ def estimate_pooled(
     """
     check_options(opts)
     al = align(runs)
-    base = estimate_segments(runs[0], opts=opts, rng=run_rng(runs[0], opts))
+    # what each demo's rows observe: for a discrete first demo, every demo's decisions and the
+    # heading intervals they observe in the first demo's command set (its rows come out so)
+    bins = commands_of(
+        runs[0], requested=opts.commands, recheck_s=opts.model.recheck_s, nudge_s=opts.model.nudge_s
+    ).bins
+    seen = [observed(run, opts, bins) for run in runs]
+    views = [v for v, _ in seen]
+    bounds = None if bins is None else [b for _, b in seen if b is not None]
+    groups = pooled_groups(views, al)
+    live = [g for g in groups if g.samples]
+    idx, dparts = _default_parts(views, al, opts)
+    redo = [g for g in live if g.samples != g.samples_of(0)]
+    refit = [  # the steps of each default fit estimated again (not the first demo's, not a repeat)
+        sum(len(s) for _, s in p)
+        if p is not None and any(d for d, _ in p) and not any(_same_parts(q, p) for q in dparts[:j])
+        else 0
+        for j, p in enumerate(dparts)
+    ]
+    # progress in steps sampled: the first demo's pass (its rows and default fits: about twice
+    # its informative steps), then the rows and default fits the other demos add steps to
+    first = 2.0 * float(views[0].informative.sum())
+    total = first + float(sum(g.samples for g in redo) + sum(refit))
+    base = estimate_segments(
+        runs[0],
+        opts=opts,
+        rng=run_rng(runs[0], opts),
+        progress=part(progress, start=0.0, size=first, total=total),
+    )
     # the first demo's rows and per-step defaults by pooled step
     own: dict[tuple[int, int], FusionRow] = {}
     own_default: dict[int, dict[str, float] | None] = {}
@@ -304,18 +365,15 @@ def estimate_pooled(
         own_default[j] = st.default_weights
         for r in st.fusion:
             own[(j, r.bac)] = r
-    groups = pooled_groups(runs, al)
-    live = [g for g in groups if g.samples]
-    idx, dparts = _default_parts(runs, al, opts)
-    redo = [g for g in live if g.samples != g.samples_of(0)]
-    total, done = max(1, len(redo)), 0
+    done = first
     names = runs[0].names
     rows: dict[int, list[FusionRow]] = {i: [] for i in range(len(al.goals))}
     for g in live:
         if g.samples == g.samples_of(0):
             rows[g.step].append(own[(g.step, g.bac)])
             continue
-        e, err = _row(g, runs, [p for p in g.parts if len(p[1])], opts, base.bins)
+        sub = part(progress, start=done, size=float(g.samples), total=total)
+        e, err = _row(g, views, [p for p in g.parts if len(p[1])], opts, base.bins, bounds, sub)
         app = [names[i] for i in g.behaviors]
         before = own.get((g.step, g.bac))
         rows[g.step].append(
@@ -334,9 +392,7 @@ def estimate_pooled(
                 weights_before=None if before is None else dict(before.weights),
             )
         )
-        done += 1
-        if progress is not None:
-            progress(float(done), float(total))
+        done += g.samples
     fits: list[dict[str, float] | None] = []
     for j, parts in enumerate(dparts):
         if parts is None:
@@ -349,12 +405,15 @@ def estimate_pooled(
         if same is not None:
             fits.append(fits[same])
             continue
-        vec, demo = problem_of(parts, runs, idx)
-        e = estimate_groups([(vec, demo)], opts=opts, rng=row_rng(opts.seed, DEFAULT, j), bins=base.bins)[0]
+        prob = problem_of(parts, views, idx, bounds)
+        sub = part(progress, start=done, size=float(refit[j]), total=total)
+        e = estimate_groups(
+            [prob], opts=opts, rng=row_rng(opts.seed, DEFAULT, j), bins=base.bins, progress=sub
+        )[0]
+        done += refit[j]
         fit = {names[i]: round(float(x), 4) for i, x in zip(idx, e.weights, strict=True) if x >= 1e-4}
         fits.append(fit or None)
-    if progress is not None:
-        progress(float(total), float(total))
+    tell(progress, total, total)
     goals = [g[len("attract_") :] if g and g.startswith("attract_") else None for g in al.goals]
     steps = tuple(
         Step(nm, goal, tuple(rows[i]), None, fits[1 + i])
@@ -374,7 +433,7 @@ def estimate_runs(
     *,
     opts: EstimateOptions,
     names: Sequence[str],
-    progress: Callable[[float, float], None] | None = None,
+    progress: Progress | None = None,
 ) -> tuple[FusionTable, int, int]:
     """The fusion table of one or more segmented runs pooled (named ``names``, the first names the
     network); returns it with the row and skipped counts. Several demos must share their
@@ -417,7 +476,7 @@ def estimate_run(
     *,
     opts: EstimateOptions,
     name: str = "demo",
-    progress: Callable[[float, float], None] | None = None,
+    progress: Progress | None = None,
 ) -> tuple[FusionTable, int, int]:
     """The fusion table of a segmented run; returns it with the group and skipped counts."""
     return estimate_runs([run], opts=opts, names=[name], progress=progress)

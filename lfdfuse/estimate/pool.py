@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lfdfuse.estimate.methods import Problem
 from lfdfuse.segment.read import SegmentedRun
 
 #: the key of a row's stream: ``row_rng`` keys are ``(seed, ROW, step, bac)``, a default fit's
@@ -122,16 +123,21 @@ def pooled_groups(runs: Sequence[SegmentedRun], al: Alignment) -> list[PooledGro
 
 
 def problem_of(
-    parts: Sequence[tuple[int, np.ndarray]], runs: Sequence[SegmentedRun], behaviors: Sequence[int]
-) -> tuple[np.ndarray, np.ndarray]:
-    """One ``(vectors (T, n, 2), demo (T, 2))`` problem of the parts' steps, concatenated in demo
-    order (one demo's part: exactly its steps, as a single-demo estimate has them)."""
+    parts: Sequence[tuple[int, np.ndarray]],
+    runs: Sequence[SegmentedRun],
+    behaviors: Sequence[int],
+    bounds: Sequence[np.ndarray] | None = None,
+) -> Problem:
+    """One problem of the parts' steps, concatenated in demo order (one demo's part: exactly its
+    steps, as a single-demo estimate has them); with ``bounds`` (per demo, each step's observed
+    heading interval ``(N, 2)``: the discrete command model) the parts' intervals too."""
     cols = list(behaviors)
     vec = [runs[d].vectors[s][:, cols, :] for d, s in parts]
     dem = [runs[d].demo[s] for d, s in parts]
+    bnd = None if bounds is None else [bounds[d][s] for d, s in parts]
     if len(vec) == 1:
-        return vec[0], dem[0]
-    return np.concatenate(vec), np.concatenate(dem)
+        return Problem(vec[0], dem[0], None if bnd is None else bnd[0])
+    return Problem(np.concatenate(vec), np.concatenate(dem), None if bnd is None else np.concatenate(bnd))
 
 
 def same_behaviors(runs: Sequence[SegmentedRun], names: Sequence[str]) -> str | None:

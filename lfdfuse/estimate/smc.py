@@ -39,6 +39,11 @@ class SMCParams:
     """Settings of the sampler (see the module docstring)."""
 
     particles: int = 384
+    #: a pass of discrete command-model rows holding at most ``discrete_few`` decisions in all
+    #: runs with ``discrete_factor`` × ``particles``: few decisions leave a broad, flat-topped
+    #: posterior (bins) whose mean settles slowly, and such a pass is cheap
+    discrete_factor: int = 4
+    discrete_few: int = 400
     ess_target: float = 0.5
     moves: int = 3  # Metropolis moves after each resampling
     final_moves: int = 6  # moves at β = 1 before a chain is frozen
@@ -122,6 +127,7 @@ class TemperedSMC:
         self.accepted = np.zeros(c)
         self.proposed = np.zeros(c)
         self.iterations = 0
+        self.first_beta = np.zeros(c)  # each chain's first temperature above 0 (for ``progress``)
 
     # ------------------------------------------------------------------ the model, batched
 
@@ -140,6 +146,30 @@ class TemperedSMC:
     def done(self) -> bool:
         return bool((self.final_done >= self.params.final_moves).all())
 
+    @property
+    def progress(self) -> float:
+        """The share of the pass done, in ``[0, 1]``, growing about linearly with the time it takes.
+
+        Per chain: 0.8 for tempering, measured in ``log β`` from its first step ``β₁`` (adaptive
+        tempering at a fixed ESS moves ``log β`` by about the same amount each iteration, so the
+        first step is taken as one unit of ``1 + ln(1/β₁)``), and 0.2 for the final moves at
+        ``β = 1``. Chains are weighted by their row's steps (what an iteration costs them).
+        """
+        if self.done:
+            return 1.0
+        b1 = np.where(self.first_beta > 0.0, self.first_beta, 1.0)
+        with np.errstate(divide="ignore"):
+            lb = np.log(np.maximum(self.beta, 1e-300))
+        units = 1.0 + np.log(1.0 / np.minimum(b1, 1.0))
+        temper = np.where(
+            self.beta >= 1.0,
+            1.0,
+            np.where(self.beta > 0.0, np.clip((1.0 + lb - np.log(b1)) / units, 0.0, 1.0), 0.0),
+        )
+        final = np.minimum(self.final_done, self.params.final_moves) / max(1, self.params.final_moves)
+        chain = 0.8 * temper + 0.2 * final
+        return float(min(1.0, (chain * self.steps).sum() / max(float(self.steps.sum()), 1e-12)))
+
     def __iter__(self) -> Iterator[TemperedSMC]:
         return self
 
@@ -155,6 +185,7 @@ class TemperedSMC:
         self.ll = gather(self.ll, idx)
         self.beta = np.where(active, np.minimum(1.0, self.beta + delta), self.beta)
         self.beta[self.beta > 1.0 - 1e-12] = 1.0
+        self.first_beta = np.where(self.first_beta > 0.0, self.first_beta, self.beta)
         for _ in range(self.params.moves):
             self._move(active & (self.final_done < self.params.final_moves))
             self.final_done += (self.beta >= 1.0) & active
@@ -164,6 +195,10 @@ class TemperedSMC:
     def run(self) -> SMCResult:
         for _ in self:
             pass
+        return self.result()
+
+    def result(self) -> SMCResult:
+        """Where the chains are now (after the last iteration: the posterior draws)."""
         return SMCResult(
             self.logw,
             self.mask,

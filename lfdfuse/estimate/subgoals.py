@@ -26,6 +26,7 @@ from lfdfuse.estimate.replay import fused_vectors
 from lfdfuse.log.reader import Run
 from lfdfuse.network.landmarks import Ahead, Landmark, OpeningCount
 from lfdfuse.network.table import FusionTable, Network, Step
+from lfdfuse.progress import Progress, tell
 from lfdfuse.segment.decisions import (
     DecisionParams,
     DecisionPoint,
@@ -58,11 +59,12 @@ def refine(
     *,
     opts: EstimateOptions,
     params: DecisionParams = DecisionParams(),
+    progress: Progress | None = None,
 ) -> SubgoalResult:
     """``table`` (the paper's table of ``run``) with sub-goals at the run's decision points.
 
     Only the sub-segments of goal segments with a decision are estimated; every other step of
-    ``table`` is kept as it is.
+    ``table`` is kept as it is. ``progress`` is told how far the sub-segments' pass is.
     """
     decisions = find_decisions(
         segments=run.segments,
@@ -73,6 +75,7 @@ def refine(
         params=params,
     )
     if not decisions:
+        tell(progress, 1.0, 1.0)
         return SubgoalResult(table, ())
     subs = split_segments(run.segments, decisions)
     seg_of = np.zeros_like(run.segment_of)
@@ -81,7 +84,9 @@ def refine(
     decided = {d.segment for d in decisions}
     new = [(orig, s) for orig, s in subs if orig in decided]
     sub_run = replace(run, segments=tuple(s for _, s in new), segment_of=seg_of)
-    est = estimate_segments(sub_run, opts=opts, rng=run_rng(run, opts), table_default=False)
+    est = estimate_segments(
+        sub_run, opts=opts, rng=run_rng(run, opts), table_default=False, progress=progress
+    )
     sub_steps = dict(zip((s.index for _, s in new), est.steps, strict=True))
     steps = list(table.network.steps)
     for seg in run.segments:

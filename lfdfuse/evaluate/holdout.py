@@ -25,7 +25,6 @@ reached uses the table's default weights.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -37,6 +36,8 @@ from lfdfuse.estimate.model import CommandBins
 from lfdfuse.estimate.pipeline import EstimateOptions, Method, estimate_run
 from lfdfuse.estimate.replay import fused_vectors
 from lfdfuse.network.table import FusionTable
+from lfdfuse.progress import Progress
+from lfdfuse.progress import part as share
 from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.segment.read import SegmentedRun
 
@@ -155,7 +156,7 @@ def evaluate(
     holdout: float = 0.3,
     seed: int = 0,
     opts: EstimateOptions | None = None,
-    progress: Callable[[float, float], None] | None = None,
+    progress: Progress | None = None,
 ) -> Evaluation:
     """Fit on the first ``1 − holdout`` of the steps, score every method on the rest."""
     if not (math.isfinite(holdout) and 0.0 < holdout < 1.0):
@@ -189,13 +190,12 @@ def evaluate(
     decided = np.zeros(0, dtype=np.int64) if cm.decisions is None else np.nonzero(cm.decisions[cut:])[0]
     chosen: dict[str, np.ndarray] = {}
     for k, (name, part, eo) in enumerate(fits):
-        table, _, _ = estimate_run(part, opts=eo, name=name)
+        sub = share(progress, start=float(k), size=1.0, total=len(fits) + 1.0)
+        table, _, _ = estimate_run(part, opts=eo, name=name, progress=sub)
         predictions[name] = predict(table, test, test_steps, segment_offset=offset if part is test else 0)
         if cm.bins is not None:
             at = predict(table, test, decided, segment_offset=offset if part is test else 0)
             chosen[name] = bin_of(cm.bins, at)
-        if progress is not None:
-            progress(k + 1.0, len(fits) + 1.0)
     predictions["straight"] = np.zeros(len(test_steps))
     # the last demonstrated heading before each held-out step (informative ones only)
     all_inf = np.nonzero(run.informative)[0]

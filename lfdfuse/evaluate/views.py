@@ -9,7 +9,8 @@ here draws: the figures take these dataclasses.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Literal
 
@@ -22,6 +23,7 @@ from lfdfuse.log import lfd
 from lfdfuse.log.reader import file_info, hold, iter_messages, read_run
 from lfdfuse.segment.read import read_segmented
 from lfdfuse.sim.robot import RobotParams
+from lfdfuse.sim.sensors import ScanGeometry
 from lfdfuse.world.model import World, builtin_names, load_world, parse_world
 
 LogKind = Literal["demo", "segmented", "run"]
@@ -58,6 +60,9 @@ class PathData:
     goals: tuple[GoalMark, ...]
     collisions: np.ndarray
     metadata: dict[str, str] = field(default_factory=dict)
+    #: without a map: the laser returns ``(K, 2)`` (m) in the pose's frame (odometry for an
+    #: imported log), the scans' own picture of the walls; None with a map
+    scan_points: np.ndarray | None = None
 
     @property
     def part_label(self) -> str:
@@ -114,6 +119,52 @@ def _goal_name(goal: str | None) -> str | None:
     return goal[len("attract_") :] if goal.startswith("attract_") else goal
 
 
+#: at most this many laser returns are kept for a plot (every k-th scan past it)
+MAX_SCAN_POINTS = 2_000_000
+
+
+def mount_offset(metadata: dict[str, str]) -> tuple[float, float]:
+    """Where the laser sits on the robot (m, base frame): the log's ``laser_mount`` (an imported
+    or live log; its yaw is already in the scan's angles), else at the base."""
+    try:
+        x, y, _yaw = (float(v) for v in metadata.get("laser_mount", "0,0,0").split(","))
+    except ValueError:
+        return (0.0, 0.0)
+    return (x, y) if math.isfinite(x) and math.isfinite(y) else (0.0, 0.0)
+
+
+def scan_points(
+    ranges_m: np.ndarray,
+    geometry: ScanGeometry,
+    pose: np.ndarray,
+    *,
+    mount_xy: tuple[float, float] = (0.0, 0.0),
+    max_points: int = MAX_SCAN_POINTS,
+) -> np.ndarray:
+    """The laser returns ``(K, 2)`` (m) in the frame of ``pose``: beam ``i`` of scan ``t`` at
+    ``pose[t] ∘ (mount + r·(cos aᵢ, sin aᵢ))``; beams without a return (at the max range, or not
+    finite) are left out. ``ranges_m (N, B)``, ``pose (N, 3)``; every k-th scan when there would
+    be more than ``max_points``.
+
+    >>> g = ScanGeometry(0.0, math.pi / 2, 2, 5.0)
+    >>> scan_points(np.array([[1.0, 5.0]]), g, np.array([[1.0, 2.0, math.pi / 2]])).round(6).tolist()
+    [[1.0, 3.0]]
+    """
+    n, b = ranges_m.shape
+    if n == 0 or b == 0:
+        return np.zeros((0, 2))
+    step = max(1, math.ceil(n * b / max(max_points, 1)))
+    r, p = ranges_m[::step], pose[::step]
+    hit = np.isfinite(r) & (r < geometry.max_range_m - 1e-6) & (r > 0.0)
+    r = np.where(hit, r, 0.0)
+    a = geometry.angles[None, :]
+    bx = mount_xy[0] + r * np.cos(a)  # (n', B) in the base frame
+    by = mount_xy[1] + r * np.sin(a)
+    c, s = np.cos(p[:, 2:3]), np.sin(p[:, 2:3])
+    wx, wy = p[:, 0:1] + c * bx - s * by, p[:, 1:2] + s * bx + c * by
+    return np.column_stack([wx[hit], wy[hit]])
+
+
 def load_log(path: str | Path) -> PathData:
     """A demo, segmented or run MCAP as plot data; a clear error if it has no path to draw."""
     src = str(path)
@@ -128,9 +179,20 @@ def load_log(path: str | Path) -> PathData:
     v = run.cmd_v_mps[hold(run.cmd_t_ns, run.t_ns)] if len(run.cmd_t_ns) else np.zeros(len(run))
     hits = contacts(pose, v, world)
     if kind == "segmented":
-        return _segmented(path, src, world, t_s, pose, run.t_ns, hits, run.metadata)
-    if kind == "run":
-        return _run(path, src, world, t_s, pose, run.t_ns, hits, run.metadata)
+        data = _segmented(path, src, world, t_s, pose, run.t_ns, hits, run.metadata)
+    elif kind == "run":
+        data = _run(path, src, world, t_s, pose, run.t_ns, hits, run.metadata)
+    else:
+        data = _demo(run.metadata, world, src, t_s, pose, hits)
+    if world is None:  # no map: the scans draw the walls they saw
+        mount = mount_offset(run.metadata)
+        return replace(data, scan_points=scan_points(run.ranges_m, run.geometry, pose, mount_xy=mount))
+    return data
+
+
+def _demo(
+    meta: dict[str, str], world: World | None, src: str, t_s: np.ndarray, pose: np.ndarray, hits: np.ndarray
+) -> PathData:
     return PathData(
         "demo",
         src,
@@ -138,11 +200,11 @@ def load_log(path: str | Path) -> PathData:
         t_s,
         pose,
         np.zeros(len(t_s), dtype=np.int64),
-        (str(run.metadata.get("teacher") or "demonstration"),),
+        (str(meta.get("teacher") or "demonstration"),),
         None,
         (),
         hits,
-        run.metadata,
+        meta,
     )
 
 

@@ -3,40 +3,25 @@
 from __future__ import annotations
 
 import io
-import math
 import os
 import stat
 import struct
-from collections.abc import Iterator
-from dataclasses import dataclass, field
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-import orjson
 import zstandard
 from mcap.exceptions import McapError
 from mcap.reader import make_reader
 
 from lfdfuse.errors import LogError
 from lfdfuse.log.messages import PROVENANCE, RawMessage, from_stamp
-from lfdfuse.log.sensing import (
-    ScanMessage,
-    decode_detections,
-    decode_pose,
-    decode_scan,
-    decode_twist,
-    scan_geometry,
-)
-from lfdfuse.log.stamps import (
-    MAX_T_NS,  # latest log time we read: int64 ns in our arrays (MCAP allows uint64)
-)
-from lfdfuse.sim.sensors import Detection, ScanGeometry
+from lfdfuse.log.run import MAX_BEAMS, RUN_TOPICS, Run, RunBuilder, hold, meta_float
+from lfdfuse.log.stamps import check_log_time
 
 #: the first bytes of every MCAP file
 MCAP_MAGIC = b"\x89MCAP0\r\n"
-#: most beams a scan may have (real 2D lidars have up to a few thousand)
-MAX_BEAMS = 8192
 #: largest world attachment we read back (the world file a simulated demo carries)
 MAX_WORLD_BYTES = 16 * 2**20
 #: what the mcap library and its decompressors raise on a damaged file
@@ -153,21 +138,23 @@ def _unreadable(path: str | Path, exc: BaseException) -> LogError:
     return LogError(f"{path}: not a readable MCAP file (damaged: {text})")
 
 
-def _time(path: str | Path, topic: str, t_ns: int) -> int:
-    if t_ns > MAX_T_NS:
-        raise LogError(
-            f"{path}: a {topic} message has log time {t_ns} ns, past the int64 nanoseconds lfdfuse reads"
-        )
-    return t_ns
+def iter_records(
+    path: str | Path, *, topics: Sequence[str] | None = None, check_times: bool = True
+) -> Iterator[tuple[str, str, str, int, bytes]]:
+    """``(topic, schema name, message encoding, log time ns, data)`` in log-time order: one pass
+    over the file's messages (of ``topics``, or all).
 
-
-def _iter(path: str | Path, topics: list[str] | None) -> Iterator[tuple[str, str, str, int, bytes]]:
-    """``(topic, schema name, message encoding, log time ns, data)`` in log-time order."""
+    ``check_times=False`` leaves the int64 check of each log time to the caller, who feeds the
+    messages to readers that check their own (:meth:`lfdfuse.log.run.RunBuilder.feed`): then one
+    reader's bad time is its error, not the whole pass's.
+    """
     with _open(path) as stream:
         try:
             reader = make_reader(stream)
-            for schema, channel, message in reader.iter_messages(topics=topics, log_time_order=True):
-                _time(path, channel.topic, message.log_time)
+            wanted = None if topics is None else list(topics)
+            for schema, channel, message in reader.iter_messages(topics=wanted, log_time_order=True):
+                if check_times:
+                    check_log_time(path, channel.topic, message.log_time)
                 yield (
                     channel.topic,
                     schema.name if schema else "",
@@ -183,7 +170,7 @@ def iter_messages(
     path: str | Path, *, topics: list[str] | None = None
 ) -> Iterator[tuple[str, str, int, bytes]]:
     """Yield ``(topic, schema_name, log_time_ns, data)`` in log-time order."""
-    for topic, schema, _enc, t, data in _iter(path, topics):
+    for topic, schema, _enc, t, data in iter_records(path, topics=topics):
         yield topic, schema, t, data
 
 
@@ -195,8 +182,8 @@ def iter_raw(path: str | Path, *, exclude_prefix: str | None = None) -> Iterator
             for schema, channel, message in reader.iter_messages(log_time_order=True):
                 if exclude_prefix is not None and channel.topic.startswith(exclude_prefix):
                     continue
-                _time(path, channel.topic, message.log_time)
-                _time(path, channel.topic, message.publish_time)
+                check_log_time(path, channel.topic, message.log_time)
+                check_log_time(path, channel.topic, message.publish_time)
                 yield RawMessage(
                     channel.topic,
                     schema.name if schema else "",
@@ -256,240 +243,28 @@ def file_info(path: str | Path) -> FileInfo:
     return FileInfo(channels, start, end, metadata, attachments, header.library)
 
 
-@dataclass(frozen=True)
-class Run:
-    """A run loaded into arrays, on the clock of its laser scans.
-
-    ``t_ns (N,)``, ``ranges_m (N, B)``; ``sonar_m (N, S)`` and ``pose (N, 3)`` (x, y, yaw) are
-    held to each scan time (None when the log lacks them); commands keep their own clock
-    ``cmd_t_ns (M,)``, ``cmd_v_mps (M,)``, ``cmd_omega_rps (M,)``.
-    """
-
-    t_ns: np.ndarray
-    geometry: ScanGeometry
-    ranges_m: np.ndarray
-    cmd_t_ns: np.ndarray
-    cmd_v_mps: np.ndarray
-    cmd_omega_rps: np.ndarray
-    sonar_m: np.ndarray | None = None
-    sonar_geometry: ScanGeometry | None = None
-    pose: np.ndarray | None = None
-    detections: list[tuple[Detection, ...]] = field(default_factory=list)
-    metadata: dict[str, str] = field(default_factory=dict)
-    world_yaml: str | None = None
-    topics: tuple[str, ...] = ()
-
-    def __len__(self) -> int:
-        return len(self.t_ns)
-
-
-def hold(src_t: np.ndarray, dst_t: np.ndarray) -> np.ndarray:
-    """Index of the latest ``src_t`` at or before each ``dst_t`` (0 before the first)."""
-    return np.clip(np.searchsorted(src_t, dst_t, side="right") - 1, 0, max(len(src_t) - 1, 0))
-
-
-class _Rows:
-    """A growing ``(n, width)`` float64 array: one row per scan, never a Python list per beam."""
-
-    def __init__(self, width: int, capacity: int) -> None:
-        self.data = np.empty((max(capacity, 16), width), dtype=np.float64)
-        self.n = 0
-
-    def append(self, row: np.ndarray) -> None:
-        if self.n == len(self.data):
-            grown = np.empty((2 * len(self.data), self.data.shape[1]), dtype=np.float64)
-            grown[: self.n] = self.data
-            self.data = grown
-        self.data[self.n] = row
-        self.n += 1
-
-    def array(self) -> np.ndarray:
-        return self.data[: self.n] if self.n == len(self.data) else self.data[: self.n].copy()
-
-
-def meta_float(meta: dict[str, str], key: str, default: float, *, path: str | Path | None = None) -> float:
-    """A positive number from provenance metadata; the default when absent.
-
-    Present but not a positive number (``"far"``, ``"nan"``, ``"-1"``) is a :class:`LogError`: the
-    value sets which ranges count as no return, so a guess would change what is learned.
-    """
-    if key not in meta:
-        return default
-    text = meta[key]
-    try:
-        value = float(text)
-    except (TypeError, ValueError):
-        value = math.nan
-    if not value > 0:  # also NaN
-        where = f"{path}: " if path is not None else "the log's "
-        raise LogError(f"{where}metadata {key} must be a positive number, got {text[:40]!r}")
-    return value
-
-
-_DECODE_ERRORS = (orjson.JSONDecodeError, KeyError, TypeError, ValueError, IndexError, AttributeError)
-
-
-def _json(path: str | Path, topic: str, t_ns: int, data: bytes) -> dict[str, Any]:
-    try:
-        msg = orjson.loads(data)
-    except orjson.JSONDecodeError as exc:
-        raise LogError(f"{path}: a {topic} message at t={t_ns} ns is not valid JSON ({exc})") from exc
-    if not isinstance(msg, dict):
-        raise LogError(f"{path}: a {topic} message at t={t_ns} ns is not a JSON object")
-    return msg
-
-
-def _ranges(path: str | Path, topic: str, t_ns: int, scan: ScanMessage) -> np.ndarray:
-    values = scan.ranges_m
-    if not isinstance(values, list) or not values:
-        raise LogError(f"{path}: a {topic} message at t={t_ns} ns has no beams")
-    if len(values) > MAX_BEAMS:
-        raise LogError(
-            f"{path}: a {topic} message has {len(values)} beams; at most {MAX_BEAMS} are supported"
-        )
-    if not (math.isfinite(scan.start_rad) and math.isfinite(scan.end_rad)):
-        raise LogError(f"{path}: a {topic} message at t={t_ns} ns has non-finite start or end angles")
-    try:
-        row = np.array(values, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise LogError(f"{path}: a {topic} message at t={t_ns} ns has ranges that are not numbers") from exc
-    if row.ndim != 1:
-        raise LogError(f"{path}: a {topic} message at t={t_ns} ns has ranges that are not numbers")
-    return row
-
-
-def _detections(path: str | Path, t_ns: int, msg: dict[str, Any]) -> tuple[Detection, ...]:
-    dets = decode_detections(msg)
-    for d in dets:
-        if (
-            not isinstance(d.name, str)
-            or not d.name
-            or len(d.name) > 64
-            or not d.name.replace("_", "").isalnum()
-        ):
-            raise LogError(f"{path}: a /targets message at t={t_ns} ns names an invalid target")
-        if not (math.isfinite(float(d.bearing_rad)) and math.isfinite(float(d.range_m))):
-            raise LogError(f"{path}: a /targets message at t={t_ns} ns has a non-finite bearing or range")
-    return tuple(Detection(d.name, float(d.bearing_rad), float(d.range_m)) for d in dets)
-
-
-def _check_encodings(path: str | Path, info: FileInfo) -> None:
-    for topic in ("/scan", "/cmd_vel"):
-        got = info.channels.get(topic)
-        if got is not None and got[1] != "json":
-            raise LogError(
-                f"{path}: {topic} is {got[1] or 'unknown'}-encoded {got[0] or 'data'}, not an lfdfuse log:"
-                f" run `lfdfuse import {path}` first"
-            )
-
-
 def read_run(path: str | Path) -> Run:
-    """Load an lfdfuse log (simulated, executed or imported) into arrays.
-
-    Memory is the arrays themselves (scans are decoded one message at a time into a
-    preallocated ``(N, B)`` array); every malformed message is a :class:`LogError` naming it.
+    """Load an lfdfuse log (simulated, executed or imported) into arrays: its summary, one pass
+    over its :data:`~lfdfuse.log.run.RUN_TOPICS` (:class:`~lfdfuse.log.run.RunBuilder`), and the
+    attached world file. Every malformed message is a :class:`LogError` naming it.
     """
     info = file_info(path)
-    _check_encodings(path, info)
-    counts = {topic: n for topic, (_s, _e, n) in info.channels.items()}
-    scans: _Rows | None = None
-    scan_t: list[int] = []
-    sonars: _Rows | None = None
-    sonar_t: list[int] = []
-    pose_t: list[int] = []
-    poses: list[tuple[float, float, float]] = []
-    cmd_t: list[int] = []
-    cmds: list[tuple[float, float]] = []
-    dets: list[tuple[int, tuple[Detection, ...]]] = []
-    first_scan: ScanMessage | None = None
-    first_sonar: ScanMessage | None = None
-    topics: set[str] = set()
-    # times stay int64 nanoseconds: a float64 cannot hold an epoch stamp to the nanosecond, and
-    # pairing commands with scans by rounded times pairs the wrong ones
-    for topic, _schema, enc, t_ns, data in _iter(path, ["/scan", "/sonar", "/pose", "/cmd_vel", "/targets"]):
-        if enc != "json":
-            raise LogError(
-                f"{path}: {topic} is {enc or 'unknown'}-encoded: run `lfdfuse import {path}` first"
-            )
-        topics.add(topic)
-        msg = _json(path, topic, t_ns, data)
-        try:
-            if topic == "/scan":
-                scan = decode_scan(msg)
-                row = _ranges(path, topic, t_ns, scan)
-                if scans is None:
-                    first_scan, scans = scan, _Rows(len(row), counts.get(topic, 0))
-                elif len(row) != scans.data.shape[1]:
-                    raise LogError(
-                        f"{path}: /scan messages have different beam counts ({scans.data.shape[1]} and {len(row)})"
-                    )
-                scans.append(row)
-                scan_t.append(t_ns)
-            elif topic == "/sonar":
-                sonar = decode_scan(msg)
-                row = _ranges(path, topic, t_ns, sonar)
-                if sonars is None:
-                    first_sonar, sonars = sonar, _Rows(len(row), counts.get(topic, 0))
-                elif len(row) != sonars.data.shape[1]:
-                    raise LogError(f"{path}: /sonar messages have different beam counts")
-                sonars.append(row)
-                sonar_t.append(t_ns)
-            elif topic == "/pose":
-                pose_t.append(t_ns)
-                poses.append(decode_pose(msg))
-            elif topic == "/cmd_vel":
-                cmd_t.append(t_ns)
-                cmds.append(decode_twist(msg))
-            elif topic == "/targets":
-                dets.append((t_ns, _detections(path, t_ns, msg)))
-        except _DECODE_ERRORS as exc:
-            raise LogError(
-                f"{path}: a {topic} message at t={t_ns} ns is malformed ({exc.__class__.__name__}: {exc})"
-            ) from exc
-    missing = [t for t in ("/scan", "/cmd_vel") if t not in topics]
-    if missing:
-        raise LogError(f"{path}: the log has no {' and no '.join(missing)} messages")
-    assert first_scan is not None and scans is not None
-    t = np.array(scan_t, dtype=np.int64)
-    ranges = scans.array()
-    del scans
-    meta: dict[str, str] = info.metadata.get(PROVENANCE, {})
-    # without our metadata the max range is unknown: then no range counts as a sentinel (inf), which
-    # is harmless to the primitives, which only look at returns nearer than d_max
-    max_range = meta_float(meta, "laser_max_range_m", math.inf, path=path)
-    geom = scan_geometry(first_scan, ranges.shape[1], max_range)
-    cmd = np.array(cmds, dtype=np.float64).reshape(-1, 2)
-    run_kwargs: dict[str, Any] = {}
-    if sonars is not None and first_sonar is not None:
-        st = np.array(sonar_t, dtype=np.int64)
-        sr = sonars.array()
-        run_kwargs["sonar_m"] = sr[hold(st, t)]
-        run_kwargs["sonar_geometry"] = scan_geometry(
-            first_sonar, sr.shape[1], meta_float(meta, "sonar_max_range_m", math.inf, path=path)
-        )
-    if poses:
-        pa = np.array(poses, dtype=np.float64)
-        run_kwargs["pose"] = pa[hold(np.array(pose_t, dtype=np.int64), t)]
-    if dets:
-        dt = np.array([d[0] for d in dets], dtype=np.int64)
-        idx = hold(dt, t)
-        run_kwargs["detections"] = [
-            dets[i][1] if dets[i][0] <= tt else () for i, tt in zip(idx, t, strict=True)
-        ]
-    else:
-        run_kwargs["detections"] = [() for _ in t]
-    return Run(
-        t_ns=t,
-        geometry=geom,
-        ranges_m=ranges,
-        cmd_t_ns=np.array(cmd_t, dtype=np.int64),
-        cmd_v_mps=cmd[:, 0],
-        cmd_omega_rps=cmd[:, 1],
-        metadata=meta,
-        world_yaml=_world_attachment(path) if "world.yaml" in info.attachments else None,
-        topics=tuple(sorted(topics)),
-        **run_kwargs,
-    )
+    builder = run_builder(path, info)
+    for topic, _schema, enc, t_ns, data in iter_records(path, topics=RUN_TOPICS, check_times=False):
+        builder.feed(topic, enc, t_ns, data)
+    return finish_run(path, info, builder)
+
+
+def run_builder(path: str | Path, info: FileInfo) -> RunBuilder:
+    """A builder for the run of ``path``, whose summary is ``info`` (a :class:`LogError` when its
+    scans or commands are not ours: a robot log to import first)."""
+    return RunBuilder(path, channels=info.channels, metadata=info.metadata.get(PROVENANCE, {}))
+
+
+def finish_run(path: str | Path, info: FileInfo, builder: RunBuilder) -> Run:
+    """The run ``builder`` was fed, with the world file attached to ``path`` (read last: only a hint)."""
+    run = builder.finish()
+    return replace(run, world_yaml=_world_attachment(path) if "world.yaml" in info.attachments else None)
 
 
 def _world_attachment(path: str | Path) -> str | None:
@@ -505,15 +280,21 @@ def _world_attachment(path: str | Path) -> str | None:
 
 __all__ = [
     "MAX_BEAMS",
+    "RUN_TOPICS",
     "FileInfo",
     "RawMessage",
     "Run",
+    "RunBuilder",
+    "check_log_file",
     "file_info",
+    "finish_run",
     "from_stamp",
     "hold",
     "iter_attachments",
     "iter_messages",
     "iter_raw",
-    "check_log_file",
+    "iter_records",
+    "meta_float",
     "read_run",
+    "run_builder",
 ]

@@ -6,7 +6,10 @@ Times are integer nanoseconds (epoch stamps of real logs included); ``{sec, nsec
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any
+
+from lfdfuse.errors import LogError
 
 MAP_FRAME = "map"
 ROBOT_FRAME = "base_link"
@@ -18,6 +21,16 @@ def stamp(t_ns: int) -> dict[str, int]:
 
 #: the int64 nanoseconds our arrays hold
 MIN_T_NS, MAX_T_NS = -(2**63), 2**63 - 1
+
+
+def check_log_time(path: str | Path, topic: str, t_ns: int) -> int:
+    """``t_ns``, a message's log time, when our int64 arrays hold it (MCAP allows uint64); else a
+    :class:`LogError` naming the file and topic."""
+    if t_ns > MAX_T_NS:
+        raise LogError(
+            f"{path}: a {topic} message has log time {t_ns} ns, past the int64 nanoseconds lfdfuse reads"
+        )
+    return t_ns
 
 
 def _whole(value: Any) -> int:

@@ -7,6 +7,9 @@ right variants of a primitive are two shades of one hue, so a reader sees the fa
 
 from __future__ import annotations
 
+import colorsys
+
+from lfdfuse.behaviors.names import legend_entry
 from lfdfuse.world.model import TARGET_COLORS
 
 #: behaviour name → hex colour (colour-blind-safe hues from the Okabe–Ito and Tol palettes)
@@ -33,24 +36,22 @@ BEHAVIOR_HATCH: dict[str, str] = {
     "circular_avoid_right": "//",
 }
 
-#: short labels (the paper's Table I acronyms where it has one)
-BEHAVIOR_LABELS: dict[str, str] = {
-    "avoid": "LA avoid",
-    "sonar_avoid": "SA sonar avoid",
-    "wander": "W wander",
-    "wander_left": "WL wander left",
-    "wander_right": "WR wander right",
-    "wall_attract": "WF wall attract",
-    "wall_attract_left": "WFL wall attract left",
-    "wall_attract_right": "WFR wall attract right",
-    "wall_side_left": "WSL wall side left",
-    "wall_side_right": "WSR wall side right",
-    "circular_avoid_left": "CAL circular avoid left",
-    "circular_avoid_right": "CAR circular avoid right",
-}
-
-#: goal segments and network steps, in order (Tol's "bright" palette without the target hues)
-STEP_COLORS: tuple[str, ...] = ("#4477AA", "#EE6677", "#228833", "#CCBB44", "#66CCEE", "#AA3377", "#BBBBBB")
+#: goal segments and network steps, in order: Tol's "bright" palette (without its grey, which
+#: is the colour of a tick after the last goal), then his "dark" one; :func:`step_color` goes on
+#: past them with hues of its own, so no two steps ever share a colour
+STEP_COLORS: tuple[str, ...] = (
+    "#4477AA",
+    "#EE6677",
+    "#228833",
+    "#CCBB44",
+    "#66CCEE",
+    "#AA3377",
+    "#222255",
+    "#225555",
+    "#663333",
+    "#666633",
+    "#225522",
+)
 
 WALL_COLOR = "#1a1a1a"
 OBSTACLE_COLOR = "#8c5a2b"
@@ -80,11 +81,18 @@ def behavior_hatch(name: str) -> str:
 
 
 def behavior_label(name: str) -> str:
-    """The legend label: ``BA red attract`` for attractors, the Table I acronym for the rest."""
-    if name.startswith("attract_"):
-        return f"BA attract {name[len('attract_') :]}"
-    return BEHAVIOR_LABELS.get(name, name)
+    """The legend label, ``WFL = wall_attract_left``: the abbreviation the terminal's tables use
+    (:mod:`lfdfuse.behaviors.names`, the one table of them) and the name it stands for."""
+    return legend_entry(name)
 
 
 def step_color(index: int) -> str:
-    return STEP_COLORS[index % len(STEP_COLORS)]
+    """The colour of goal segment or network step ``index`` (from 0): :data:`STEP_COLORS`, then
+    hues a golden angle apart at alternating lightness. Distinct for every index (a test draws
+    hundreds), never the grey of ticks after the last goal."""
+    if index < len(STEP_COLORS):
+        return STEP_COLORS[index]
+    k = index - len(STEP_COLORS)
+    hue = (0.11 + k * 0.618033988749895) % 1.0
+    light = (0.35, 0.5, 0.65)[k % 3]
+    return _hex(colorsys.hls_to_rgb(hue, light, 0.75 - 0.1 * ((k // 3) % 3)))

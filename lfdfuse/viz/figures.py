@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from matplotlib import patheffects
 from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection
 from matplotlib.lines import Line2D
@@ -25,8 +26,14 @@ LEFT_COLOR = "#0072B2"
 RIGHT_COLOR = "#D55E00"
 
 
-def draw_world(ax: Axes, world: World, *, margin_m: float = 0.5) -> None:
-    """Walls (black), obstacles (brown, filled) and targets (their colour, named), to scale."""
+def draw_world(
+    ax: Axes, world: World, *, margin_m: float = 0.5, clear_of: Sequence[tuple[float, float]] = ()
+) -> None:
+    """Walls (black), obstacles (brown, filled) and targets (their colour, named), to scale.
+
+    A target's name is written on the side away from the nearest of ``clear_of`` (x, y in m:
+    the marks drawn beside targets, such as where a goal was reached), so it never sits on them.
+    """
     for line in world.walls:
         xy = np.asarray(line)
         ax.plot(xy[:, 0], xy[:, 1], color=colors.WALL_COLOR, lw=2.0, solid_capstyle="round", zorder=2)
@@ -38,8 +45,19 @@ def draw_world(ax: Axes, world: World, *, margin_m: float = 0.5) -> None:
     for t in world.targets:
         c = colors.target_color(t.name)
         ax.add_patch(Circle((t.x, t.y), max(t.radius, 0.25), fc=c, ec="black", lw=0.8, zorder=4))
+        dx, dy = _away(t.x, t.y, clear_of)
         ax.annotate(
-            t.name, (t.x, t.y), xytext=(6, 6), textcoords="offset points", color=c, fontsize=9, weight="bold"
+            t.name,
+            (t.x, t.y),
+            xytext=(LABEL_OFFSET_PT * dx, LABEL_OFFSET_PT * dy),
+            textcoords="offset points",
+            ha="left" if dx >= 0.0 else "right",
+            va="bottom" if dy >= 0.0 else "top",
+            color=c,
+            fontsize=9,
+            weight="bold",
+            zorder=8,
+            path_effects=[patheffects.withStroke(linewidth=2.5, foreground="white")],
         )
     x0, y0, x1, y1 = world.bounds()
     ax.set_xlim(x0 - margin_m, x1 + margin_m)
@@ -47,6 +65,22 @@ def draw_world(ax: Axes, world: World, *, margin_m: float = 0.5) -> None:
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
+
+
+#: how far a target's name sits from its centre (points): past the target and a goal star's size
+LABEL_OFFSET_PT = 13.0
+
+
+def _away(x: float, y: float, marks: Sequence[tuple[float, float]]) -> tuple[float, float]:
+    """The unit direction from the nearest mark to ``(x, y)``: up and right when no mark is near."""
+    near = [(mx, my) for mx, my in marks if math.hypot(x - mx, y - my) < 3.0]
+    if not near:
+        return (math.sqrt(0.5), math.sqrt(0.5))
+    mx, my = min(near, key=lambda m: math.hypot(x - m[0], y - m[1]))
+    d = math.hypot(x - mx, y - my)
+    if d < 1e-9:  # the mark on the target itself: keep the label up and to the right of it
+        return (math.sqrt(0.5), math.sqrt(0.5))
+    return ((x - mx) / d, (y - my) / d)
 
 
 def _runs(part: np.ndarray) -> list[tuple[int, int, int]]:
@@ -137,19 +171,83 @@ def draw_path(ax: Axes, data: PathData, *, bac_ticks: bool = True, lw: float = 2
         )
 
 
+#: the finest cell of a scan occupancy image (m), and the most cells along its longer side
+SCAN_CELL_M = 0.05
+SCAN_MAX_CELLS = 1600
+SCAN_COLOR = "#5a5a5a"
+
+
+def scan_extent(points: np.ndarray, keep: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The corners ``(2,), (2,)`` (m) of the view of ``points (K, 2)``, K > 0: all but the
+    farthest 0.2 % on each side (stray returns), with ``keep (M, 2)``, and a metre around."""
+    lo = np.percentile(points, 0.2, axis=0) - 1.0
+    hi = np.percentile(points, 99.8, axis=0) + 1.0
+    if keep is not None and len(keep):
+        lo, hi = np.minimum(lo, keep.min(axis=0) - 1.0), np.maximum(hi, keep.max(axis=0) + 1.0)
+    return lo, hi
+
+
+def draw_scans(ax: Axes, points: np.ndarray, *, keep: np.ndarray | None = None) -> int:
+    """Where the laser hit, as an occupancy image: cells of at least :data:`SCAN_CELL_M` holding
+    any of ``points (K, 2)`` (m) in grey, darker the more returns fell in them. The view spans
+    the points (less the farthest 0.2 % on each side: stray returns) and ``keep (M, 2)``.
+
+    Returns the number of occupied cells (0: nothing drawn).
+    """
+    if len(points) == 0:
+        return 0
+    lo, hi = scan_extent(points, keep)
+    cell = max(SCAN_CELL_M, float((hi - lo).max()) / SCAN_MAX_CELLS)
+    nx, ny = (np.ceil((hi - lo) / cell).astype(int) + 1).tolist()
+    counts, _, _ = np.histogram2d(
+        points[:, 0],
+        points[:, 1],
+        bins=(nx, ny),
+        range=((lo[0], lo[0] + nx * cell), (lo[1], lo[1] + ny * cell)),
+    )
+    occupied = int((counts > 0).sum())
+    if occupied == 0:
+        return 0
+    # grey level by log(returns): a wall seen in every scan is dark, a passing leg faint
+    shade = np.log1p(counts.T) / max(float(np.log1p(counts.max())), 1e-9)
+    rgba = np.zeros((*shade.shape, 4))
+    rgba[..., :3] = np.array([int(SCAN_COLOR[i : i + 2], 16) / 255.0 for i in (1, 3, 5)])
+    rgba[..., 3] = np.where(counts.T > 0, 0.25 + 0.75 * shade, 0.0)
+    ax.imshow(
+        rgba,
+        origin="lower",
+        extent=(lo[0], lo[0] + nx * cell, lo[1], lo[1] + ny * cell),
+        interpolation="nearest",
+        zorder=1,
+    )
+    ax.plot([], [], "s", ms=6, color=SCAN_COLOR, label="laser returns (odometry frame)")
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    return occupied
+
+
 def log_map(ax: Axes, data: PathData, *, title: str | None = None) -> None:
-    """A log on its map: world, path, marks, a title with what it is and how long it ran."""
+    """A log on its map: world, path, marks, a title with what it is and how long it ran. A log
+    without a map draws the scans' returns instead (:func:`draw_scans`), so a real run reads."""
+    scanned = 0
     if data.world is not None:
-        draw_world(ax, data.world)
+        draw_world(ax, data.world, clear_of=[(g.x, g.y) for g in data.goals])
     else:
+        if data.scan_points is not None:
+            scanned = draw_scans(ax, data.scan_points, keep=data.pose[:, :2])
         ax.set_aspect("equal")
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
     draw_path(ax, data)
-    if data.world is None:
+    if data.world is None and not scanned:
         ax.autoscale_view()
     duration = float(data.t_s[-1]) if len(data.t_s) else 0.0
-    where = data.world.name if data.world is not None else "no map in the log"
+    if data.world is not None:
+        where = data.world.name
+    elif scanned:
+        where = f"no map: {len(data.scan_points) if data.scan_points is not None else 0} laser returns"
+    else:
+        where = "no map in the log"
     ax.set_title(title or f"{data.kind} — {where}, {duration:.0f} s", loc="left")
     ax.grid(True, lw=0.3, alpha=0.5)
 

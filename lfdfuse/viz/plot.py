@@ -10,9 +10,11 @@ from __future__ import annotations
 import io
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 from matplotlib.figure import Figure
+from matplotlib.legend import Legend
 
 from lfdfuse.errors import ConfigError, LfdError
 from lfdfuse.evaluate.views import PathData, load_log
@@ -57,6 +59,9 @@ def map_figure(data: PathData, *, title: str | None = None) -> Figure:
     if data.world is not None:
         x0, y0, x1, y1 = data.world.bounds()
         aspect = (y1 - y0 + 1.0) / max(x1 - x0 + 1.0, 1e-9)
+    elif data.scan_points is not None and len(data.scan_points):
+        lo, hi = figures.scan_extent(data.scan_points, data.pose[:, :2])
+        aspect = float(hi[1] - lo[1]) / max(float(hi[0] - lo[0]), 1e-9)
     else:
         aspect = 0.6
     width = 10.0
@@ -64,8 +69,35 @@ def map_figure(data: PathData, *, title: str | None = None) -> Figure:
     fig = Figure(figsize=(width, height), dpi=DPI, layout="constrained")
     ax = fig.add_subplot()
     figures.log_map(ax, data, title=title)
-    fig.legend(loc="outside lower center", ncols=4, fontsize=8, frameon=False)
+    handles, labels = ax.get_legend_handles_labels()
+    legend_below(fig, handles, labels)
     return fig
+
+
+#: the room (inches) a figure keeps below its axes for a legend of about two rows
+LEGEND_ROOM_IN = 0.6
+
+
+def legend_below(fig: Figure, handles: list[Any], labels: list[str], *, max_cols: int = 4) -> Legend:
+    """The figure's legend below its axes, in as many columns (at most ``max_cols``) as fit its
+    width — long step names in four columns ran off both sides — and the figure grown by the
+    rows past :data:`LEGEND_ROOM_IN`, so the legend is whole in the saved file and the map keeps
+    its size."""
+    cols = max(1, min(max_cols, len(handles)))
+    while True:
+        legend = fig.legend(
+            handles, labels, loc="outside lower center", ncols=cols, fontsize=8, frameon=False
+        )
+        box = legend.get_window_extent()
+        if box.width <= 0.98 * fig.bbox.width or cols == 1:
+            break
+        legend.remove()
+        cols -= 1
+    extra = box.height / fig.dpi - LEGEND_ROOM_IN
+    if extra > 0:
+        w, h = fig.get_size_inches()
+        fig.set_size_inches(w, h + extra)
+    return legend
 
 
 def table_figure(table: FusionTable, *, spread: str = "std", title: str | None = None) -> Figure:
@@ -86,13 +118,8 @@ def table_figure(table: FusionTable, *, spread: str = "std", title: str | None =
             if n not in drawn:
                 drawn.append(n)
     order = [b for b in table.behaviors if b in drawn]
-    fig.legend(
-        handles=figures.behavior_legend_handles(order),
-        loc="outside lower center",
-        ncols=min(len(order), 4) or 1,
-        fontsize=8,
-        frameon=False,
-    )
+    handles = figures.behavior_legend_handles(order)
+    legend_below(fig, list(handles), [str(h.get_label()) for h in handles])
     name = table.network.name
     fig.suptitle(title or f"fusion table {name}: weights per BAC row", x=0.01, ha="left")
     return fig

@@ -196,7 +196,85 @@ def test_commands_and_lag_on_the_command_line(tmp_path: Path) -> None:
     assert float(meta["segment_lag_s"]) >= 0.0  # --lag auto: the best-explaining lag, recorded
     for forced, want in (("auto", "discrete"), ("continuous", "continuous")):
         out = tmp_path / f"{forced}.yaml"
-        res = runner.invoke(app, ["estimate", str(seg), "--commands", forced, "-o", str(out)])
+        # a few particles: what is checked is the provenance, not the weights
+        args = ["estimate", str(seg), "--commands", forced, "--particles", "32", "-o", str(out)]
+        res = runner.invoke(app, args)
         assert res.exit_code == 0, res.output
         by = load_table(out).estimated_by
         assert by["commands"] == want and by["lag_s"] == meta["segment_lag_s"]
+
+
+def _keyboard_run(
+    headings: list[float], *, informative: list[bool] | None = None, bac: list[int] | None = None
+):  # noqa: ANN202
+    """A 10 Hz segmented run holding ``headings`` (rad), two behaviours pointing ±45°."""
+    from lfdfuse.segment.goals import GoalSegment
+    from lfdfuse.segment.read import SegmentedRun
+
+    n = len(headings)
+    h = np.array(headings)
+    vec = np.zeros((n, 2, 2))
+    vec[:, 0] = [math.cos(0.8), math.sin(0.8)]
+    vec[:, 1] = [math.cos(-0.8), math.sin(-0.8)]
+    return SegmentedRun(
+        names=("wander_left", "wander_right"),
+        t_ns=np.arange(n, dtype=np.int64) * 100_000_000,
+        vectors=vec,
+        applicable=np.ones((n, 2), dtype=bool),
+        goal_met=np.zeros((n, 2), dtype=bool),
+        demo=np.stack([np.cos(h), np.sin(h)], -1),
+        informative=np.ones(n, dtype=bool) if informative is None else np.array(informative),
+        bac=np.full(n, 3, dtype=np.int64) if bac is None else np.array(bac, dtype=np.int64),
+        segment_of=np.zeros(n, dtype=np.int64),
+        segments=(GoalSegment(0, 0, n, None),),
+        metadata={"segment_commands": "discrete"},
+    )
+
+
+def test_the_command_set_has_both_sides_of_the_keyboard() -> None:
+    """A person who only turned right in place still had the left key: its bin bounds forward."""
+    run = _keyboard_run([0.0] * 10 + [-math.pi / 2] * 10)
+    bins = commands_of(run).bins
+    assert bins is not None
+    assert [round(h, 3) for h in bins.headings] == [-1.571, 0.0, 1.571]
+    assert [round(e, 3) for e in bins.edges] == [-3.142, -0.785, 0.785, 3.142]
+
+
+def test_a_press_undone_within_nudge_s_observes_the_interval_between_the_two_commands() -> None:
+    from lfdfuse.estimate.commands import observed_bounds
+
+    arc = 0.66
+    tap = _keyboard_run([0.0] * 10 + [-arc] * 3 + [0.0] * 10)  # right arc tapped for 0.3 s
+    bins = commands_of(tap).bins
+    assert bins is not None
+    got = observed_bounds(tap, bins, nudge_s=1.0)
+    assert got[10].tolist() == [-arc, 0.0]  # between the arc and straight, not the arc's bin
+    assert got[13].tolist() == bins.bounds_of(np.array([0.0]))[0].tolist()  # the return: its own bin
+    assert got[0].tolist() == got[13].tolist()
+    held = _keyboard_run([0.0] * 10 + [-arc] * 15 + [0.0] * 10)  # held 1.5 s: a change of mind
+    assert (
+        observed_bounds(held, bins, nudge_s=1.0)[10].tolist() == bins.bounds_of(np.array([-arc]))[0].tolist()
+    )
+    assert (
+        observed_bounds(tap, bins, nudge_s=None)[10].tolist() == bins.bounds_of(np.array([-arc]))[0].tolist()
+    )
+    stop = [True] * 23
+    stop[13] = False  # a stop, then straight again: no nudge (the press was not undone)
+    stopped = _keyboard_run([0.0] * 10 + [-arc] * 3 + [0.0] * 10, informative=stop)
+    assert (
+        observed_bounds(stopped, bins, nudge_s=1.0)[10].tolist()
+        == bins.bounds_of(np.array([-arc]))[0].tolist()
+    )
+
+
+def test_a_situation_met_only_between_decisions_is_no_row() -> None:
+    """A BAC whose informative ticks hold no decision (met while a key was held) has no
+    observation of the discrete model: the table skips it rather than failing."""
+    h = [0.0] * 8 + [0.66] * 6 + [0.0] * 16
+    bac = [3] * 20 + [1] * 4 + [3] * 6  # BAC 1 only while straight is held, between re-checks
+    run = _keyboard_run(h, bac=bac)
+    decided = commands_of(run).decisions
+    assert decided is not None and not decided[20:24].any()
+    table, groups, skipped = estimate_run(run, opts=EstimateOptions(seed=0))
+    assert (groups, skipped) == (2, 1)
+    assert [r.bac for r in table.network.steps[0].fusion] == [3]

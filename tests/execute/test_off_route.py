@@ -266,16 +266,30 @@ def test_estimate_subgoals_from_the_command_line(office: tuple[Path, Path], tmp_
 def test_subgoals_read_the_log_once_and_refine_the_table_they_are_given(
     office: tuple[Path, Path], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """One read of each kind, one estimate of the whole demo, then only the new sub-segment rows."""
+    """One pass over the log's messages, one estimate of the whole demo, then only the new
+    sub-segment rows."""
     import lfdfuse.estimate.pipeline as pipeline
     from lfdfuse import learn
     from lfdfuse.estimate.methods import EstimateOptions, estimate_groups
     from lfdfuse.estimate.smc import SMCParams
-    from lfdfuse.log.reader import read_run
+    from lfdfuse.log import reader
     from lfdfuse.segment.read import read_segmented
 
     _tmp, seg = office
-    calls: dict[str, list[int]] = {"read_segmented": [], "read_run": [], "estimate_run": [], "problems": []}
+    calls: dict[str, list[int]] = {"estimate_run": [], "problems": []}
+    passes: list[Any] = []  # the topics of every pass over the file's messages
+    make_reader = reader.make_reader
+
+    def counted_reader(stream: Any, **kwargs: Any) -> Any:
+        mcap = make_reader(stream, **kwargs)
+        iter_messages = mcap.iter_messages
+
+        def counted(*args: Any, **kw: Any) -> Any:
+            passes.append(kw.get("topics", args[0] if args else None))
+            return iter_messages(*args, **kw)
+
+        mcap.iter_messages = counted
+        return mcap
 
     def counted(name: str, fn: Any) -> Any:
         def wrapper(*args: Any, **kwargs: Any) -> Any:
@@ -288,13 +302,14 @@ def test_subgoals_read_the_log_once_and_refine_the_table_they_are_given(
         calls["problems"].append(len(problems))
         return estimate_groups(problems, **kwargs)
 
-    monkeypatch.setattr(learn, "read_segmented", counted("read_segmented", read_segmented))
-    monkeypatch.setattr(learn, "read_run", counted("read_run", read_run))
+    monkeypatch.setattr(reader, "make_reader", counted_reader)
     monkeypatch.setattr(learn, "estimate_run", counted("estimate_run", pipeline.estimate_run))
     monkeypatch.setattr(pipeline, "estimate_groups", groups)
     fast = EstimateOptions(smc=SMCParams(particles=96))  # the counts, not the weights, are checked
     refined = learn.learn([seg], options=learn.LearnOptions(fast, subgoals=True))
-    assert len(calls["read_segmented"]) == len(calls["read_run"]) == len(calls["estimate_run"]) == 1
+    assert len(passes) == 1, passes
+    assert {"/lfd/behaviors", "/lfd/segment", "/scan", "/pose"} <= set(passes[0]), passes
+    assert len(calls["estimate_run"]) == 1
     assert refined.decisions, "the office demo has a decision point"
     base, sub = calls["problems"]  # the whole demo, then the refinement
     assert 0 < sub < base, calls

@@ -79,7 +79,7 @@ def test_bac_in_words() -> None:
                 "wall_attract_right",
             ),
         )
-        == "av+wL+aR"
+        == "LA+WL+WFR"
     )
     assert bac_names(0, ("avoid",)) == "none"
 

@@ -17,9 +17,9 @@ from typer.testing import CliRunner
 from lfdfuse.cli.main import app
 from lfdfuse.errors import LogError
 from lfdfuse.log import LogWriter
-from lfdfuse.log.reader import iter_raw
+from lfdfuse.log.reader import iter_raw, read_run
 from lfdfuse.segment.pipeline import segment_file
-from lfdfuse.segment.read import read_segmented
+from lfdfuse.segment.read import read_segmented, read_segmented_and_run
 from tests.segment.test_segment import write_log
 
 runner = CliRunner()
@@ -116,3 +116,62 @@ def test_an_untouched_copy_reads_the_same(segmented: tuple[Path, Any], tmp_path:
     _rewrite(segmented[0], tmp_path / "same.mcap", "/lfd/behaviors", lambda i, m: m)
     a, b = read_segmented(segmented[0]), read_segmented(tmp_path / "same.mcap")
     assert np.array_equal(a.vectors, b.vectors) and np.array_equal(a.bac, b.bac) and a.segments == b.segments
+
+
+# --- read_segmented_and_run: both reads from one pass, with their errors in their order ---------
+
+
+def _error(read: Callable[[Path], object], path: Path) -> str:
+    with pytest.raises(LogError) as info:
+        read(path)
+    return str(info.value)
+
+
+def _both(path: Path) -> str:
+    read_segmented(path)  # the segmented read first, as learn read them before
+    return _error(read_run, path)
+
+
+def _scan_without_ranges(i: int, m: dict[str, Any]) -> dict[str, Any]:
+    return {"nope": 1} if i == 3 else m
+
+
+def test_one_pass_reads_what_the_two_reads_read(segmented: tuple[Path, Any]) -> None:
+    path = segmented[0]
+    seg, run = read_segmented_and_run(path)
+    alone, raw = read_segmented(path), read_run(path)
+    for name in alone.__dataclass_fields__:
+        a, b = getattr(alone, name), getattr(seg, name)
+        assert np.array_equal(a, b) if isinstance(a, np.ndarray) else a == b, name
+    for name in raw.__dataclass_fields__:
+        a, b = getattr(raw, name), getattr(run, name)
+        if isinstance(a, np.ndarray) or a is None:
+            assert (a is None and b is None) or (a.dtype == b.dtype and np.array_equal(a, b)), name
+        else:
+            assert a == b, name
+
+
+@pytest.mark.parametrize("case", list(BROKEN))
+def test_one_pass_reports_a_broken_segmented_message_first(
+    case: str, segmented: tuple[Path, Any], tmp_path: Path
+) -> None:
+    """Broken in both: the segmented read's error, though the broken scan comes earlier."""
+    topic, change, _reason = BROKEN[case]
+    _rewrite(segmented[0], tmp_path / "b.mcap", topic, change)
+    assert _error(read_segmented_and_run, tmp_path / "b.mcap") == _error(read_segmented, tmp_path / "b.mcap")
+    _rewrite(tmp_path / "b.mcap", tmp_path / "bb.mcap", "/scan", _scan_without_ranges)
+    assert _error(read_segmented_and_run, tmp_path / "bb.mcap") == _error(
+        read_segmented, tmp_path / "bb.mcap"
+    )
+
+
+def test_one_pass_reports_a_broken_run_as_read_run_does(segmented: tuple[Path, Any], tmp_path: Path) -> None:
+    _rewrite(segmented[0], tmp_path / "s.mcap", "/scan", _scan_without_ranges)
+    got = _error(read_segmented_and_run, tmp_path / "s.mcap")
+    assert got == _both(tmp_path / "s.mcap") and "a /scan message at t=" in got
+    with LogWriter(tmp_path / "n.mcap", metadata={}) as log:  # no commands: read_run's last check
+        for raw in iter_raw(segmented[0]):
+            if raw.topic != "/cmd_vel":
+                log.copy(raw)
+    got = _error(read_segmented_and_run, tmp_path / "n.mcap")
+    assert got == _both(tmp_path / "n.mcap") and "no /cmd_vel messages" in got

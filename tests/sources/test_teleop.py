@@ -551,15 +551,19 @@ def test_a_foxglove_client_drives_and_receives_live_scans(tmp_path: Path) -> Non
     )
     try:
         assert proc.stdout is not None
-        url = ""
-        while not url:
+        # read the whole banner through the text buffer: communicate() reads the pipe beneath
+        # it, so lines already buffered here would be lost to it
+        head, url = "", ""
+        while "layout:" not in head:
             line = proc.stdout.readline()
             assert line, proc.stderr.read() if proc.stderr else ""
+            head += line
             m = re.search(r"ws://[\d.]+:\d+", line)
-            url = m.group(0) if m else ""
+            url = url or (m.group(0) if m else "")
         res = asyncio.run(_drive_over_foxglove(url, drive_s=3.0, listen_s=4.0))
         proc.send_signal(signal.SIGINT)
         stdout, stderr = proc.communicate(timeout=30)
+        stdout = head + stdout
     finally:
         if proc.poll() is None:
             proc.kill()

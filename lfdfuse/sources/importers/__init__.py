@@ -45,6 +45,13 @@ def require_lfdfuse_log(path: str | Path) -> None:
         )
 
 
+def robot_format(path: Path) -> str | None:
+    """The importer that reads ``path`` (a robot log), None for an lfdfuse demo or anything else."""
+    if not path.exists() or is_lfdfuse_log(path):
+        return None
+    return next((str(name) for name, mod in FORMATS.items() if mod.detect(path)), None)
+
+
 def detect_format(path: Path) -> str:
     """The format of a robot log, or a one-line :class:`SourceError`."""
     if not path.exists():
@@ -77,4 +84,5 @@ __all__ = [
     "detect_format",
     "is_lfdfuse_log",
     "open_source",
+    "robot_format",
 ]

@@ -18,7 +18,12 @@ def detect(path: Path) -> bool:
     return is_rosbag1(path)
 
 
-def open_source(path: Path, *, topics: TopicChoice) -> BagSource:
+def bag_path(path: Path) -> Path:
+    """``path`` when rosbags can read it as a ROS 1 bag, else a one-line :class:`SourceError`."""
     if path.suffix != ".bag":  # rosbags tells the bag generations apart by the suffix
         raise SourceError(f"{path}: a ROS 1 bag must be named *.bag to be read")
-    return BagSource(path, fmt=NAME, topics=topics, ros2=False)
+    return path
+
+
+def open_source(path: Path, *, topics: TopicChoice) -> BagSource:
+    return BagSource(bag_path(path), fmt=NAME, topics=topics, ros2=False)

@@ -41,10 +41,14 @@ def detect(path: Path) -> bool:
     return head.startswith(_MCAP_MAGIC) and "cdr" in _mcap_encodings(path)
 
 
-def open_source(path: Path, *, topics: TopicChoice) -> BagSource:
+def bag_path(path: Path) -> Path:
+    """What rosbags reads: the folder, or a folder's one storage file when it has no metadata."""
     if path.is_dir() and not (path / "metadata.yaml").is_file():
-        # a folder holding one storage file but no metadata: read the file itself
         files = sorted([*path.glob("*.db3"), *path.glob("*.mcap")])
         if len(files) == 1:
-            path = files[0]
-    return BagSource(path, fmt=NAME, topics=topics, ros2=True)
+            return files[0]
+    return path
+
+
+def open_source(path: Path, *, topics: TopicChoice) -> BagSource:
+    return BagSource(bag_path(path), fmt=NAME, topics=topics, ros2=True)

@@ -14,6 +14,7 @@ import math
 from collections import Counter
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -22,7 +23,7 @@ from rosbags.highlevel import AnyReader, AnyReaderError
 from rosbags.rosbag1 import ReaderError as Reader1Error
 from rosbags.rosbag2 import ReaderError as Reader2Error
 from rosbags.serde import SerdeError
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import Stores, TypesysError, get_typestore
 
 from lfdfuse.sources.importers.records import (
     CommandRecord,
@@ -41,7 +42,22 @@ ODOM_TYPES = ("nav_msgs/msg/Odometry",)
 TF_TOPICS = ("/tf_static", "/tf")
 _BASE_FRAMES = ("base_link", "base_footprint")
 _WORLD_FRAMES = ("odom", "map", "world", "earth")
-_READ_ERRORS = (AnyReaderError, Reader1Error, Reader2Error, SerdeError, OSError, KeyError, ValueError)
+_READ_ERRORS = (
+    AnyReaderError,
+    Reader1Error,
+    Reader2Error,
+    SerdeError,
+    TypesysError,  # a bag's embedded message definitions that do not parse
+    OSError,
+    KeyError,
+    ValueError,
+)
+
+
+def one_line(exc: BaseException, width: int = 200) -> str:
+    """An exception's message on one line (a YAML parser's spans several), at most ``width`` long."""
+    text = " ".join(str(exc).split())
+    return text if len(text) <= width else text[: width - 1] + "…"
 
 
 def _frame(name: str) -> str:
@@ -106,7 +122,7 @@ class BagSource:
             with AnyReader([self.path], default_typestore=self._store) as reader:
                 yield reader
         except _READ_ERRORS as exc:
-            raise SourceError(f"{self.path}: cannot read the bag ({exc})") from exc
+            raise SourceError(f"{self.path}: cannot read the bag ({one_line(exc)})") from exc
 
     def _messages(self, r: AnyReader, topic: str | None) -> Iterator[tuple[int, Any]]:
         conns = [c for c in r.connections if c.topic == topic]
@@ -197,6 +213,62 @@ def _pick(
     ending = [t for t in counts if t.endswith(preferred)]
     pool = ending or list(counts)
     return min(pool, key=lambda t: (-counts[t], t))
+
+
+@dataclass(frozen=True)
+class BagTopic:
+    """One topic of a bag: its message type (``pkg/msg/Name``), how many messages, how serialised."""
+
+    topic: str
+    msgtype: str
+    count: int
+    serialization: str  # cdr (ROS 2), ros1
+
+
+@dataclass(frozen=True)
+class BagListing:
+    """What ``ros2 bag info`` / ``rosbag info`` say of a bag: storage, time span, topics.
+
+    ``start_ns``/``end_ns`` are the first and last record stamps (int64 ns, epoch), None when the
+    bag holds no message; ``topics`` in the order of the topic names.
+    """
+
+    storage: str  # "ROS 1 bag v2.0", "rosbag2 sqlite3", "rosbag2 mcap"
+    files: tuple[str, ...]  # the storage files, by name
+    size_bytes: int
+    start_ns: int | None
+    end_ns: int | None
+    messages: int
+    topics: tuple[BagTopic, ...]
+
+
+def bag_listing(path: Path, *, ros2: bool) -> BagListing:
+    """The topics, types, counts and time span of a ROS 1 or ROS 2 bag (read from its index and
+    metadata, not its messages), or a one-line :class:`SourceError`."""
+    store = get_typestore(Stores.ROS2_HUMBLE if ros2 else Stores.ROS1_NOETIC)
+    files = sorted([*path.glob("*.db3"), *path.glob("*.mcap")]) if path.is_dir() else [path]
+    if ros2:
+        kinds = sorted({"sqlite3" if f.suffix == ".db3" else "mcap" for f in files}) or ["unknown storage"]
+        storage = f"rosbag2 {'+'.join(kinds)}"
+    else:
+        storage = "ROS 1 bag v2.0"
+    try:
+        with AnyReader([path], default_typestore=store) as r:
+            count = int(r.message_count)
+            start = int(r.start_time) if count else None
+            end = int(r.end_time) - 1 if count else None  # rosbags' end time is one past the last message
+            topics = []
+            for name, info in sorted(r.topics.items()):
+                ser = {
+                    getattr(c.ext, "serialization_format", "ros1") for c in info.connections
+                }  # ROS 1 connections have none
+                topics.append(
+                    BagTopic(name, info.msgtype or "(mixed types)", int(info.msgcount), "/".join(sorted(ser)))
+                )
+    except _READ_ERRORS as exc:
+        raise SourceError(f"{path}: cannot read the bag ({one_line(exc)})") from exc
+    size = sum(f.stat().st_size for f in files if f.is_file())
+    return BagListing(storage, tuple(f.name for f in files), size, start, end, count, tuple(topics))
 
 
 def is_rosbag1(path: Path) -> bool:
