@@ -119,12 +119,15 @@ class DecisionParams:
     less ``turn_margin_rad`` 91; with ``min_area`` 1.0 94 (these three before the driver's fixes
     of turns on the spot); with ``lookahead`` 40 101 (the ``distance`` cue 101 too, run for
     run). The opening's ``shape`` changed no outcome of the 7 worlds × 3 starts both were run on
-    (18/21 each), so it stays off. A wait past the onset at a T before turning completed
-    103/120, but two of the three spur exits it fixed completed the long way round the ring,
-    and it broke three other worlds: left out. What still fails: a spur entered a few metres
-    past the corner before it (its onset is not sensed while the sectors are held through the
-    corner's turn), and the exit of a spur off the ring's inside (the turn on the spot at the
-    mouth ends short of the corridor, and the rest of the step drives back in).
+    (18/21 each), and without it the ``ring-spur`` table of bench suite ``offroute`` completed
+    none of its 4 starts, in ``ring-spur`` and in ``ring-spur-large`` (with it 4/4 each: a corner
+    is not the side opening the teacher turned into), so it is on. A wait past the onset at a T
+    before turning completed 103/120, but two of the three spur exits it fixed completed the
+    long way round the ring, and it broke three other worlds: left out. What still fails: a
+    spur entered a few metres past the corner before it (its onset is not sensed while the
+    sectors are held through the corner's turn), and the exit of a spur off the ring's inside
+    (the turn on the spot at the mouth ends short of the corridor, and the rest of the step
+    drives back in).
     """
 
     divergence_rad: float = math.radians(15.0)  # demo vs fused heading (smoothed): a different way
@@ -155,7 +158,7 @@ class DecisionParams:
     #: closed) is no decision: there was no other way
     skip_corners: bool = True
     #: the landmark names the opening's shape (the way ahead open or closed at its onset)
-    shape: bool = False
+    shape: bool = True
     corner_other_steps: int = 25  # the other side open this many steps either side of the onset: a T
     #: the turn landmark looks at the teacher's turn this many steps past the onset at least ...
     settle_steps: int = 60
