@@ -5,7 +5,7 @@ the ``generated`` bench (``make bench``). On seeds 1020-1039 the chosen decision
 completed 38/60 runs with sub-goals and 21/60 without: below issue 21's 90 %. Here, as a guard
 of what does carry, two of those worlds whose spur the learned network takes only through its
 sub-goals or takes with them as without (1022: 0/3 without, 3/3 with; 1025: 3/3 and 3/3), from
-two perturbed starts each (about a minute on an idle core).
+two perturbed starts each (203 s on two cores shared with other runs).
 """
 
 from __future__ import annotations
