@@ -24,13 +24,14 @@ from lfdfuse.errors import LogError
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_segments, run_rng
 from lfdfuse.estimate.replay import fused_vectors
 from lfdfuse.log.reader import Run
-from lfdfuse.network.landmarks import Landmark
+from lfdfuse.network.landmarks import Ahead, Landmark, OpeningCount
 from lfdfuse.network.table import FusionTable, Network, Step
 from lfdfuse.progress import Progress, tell
 from lfdfuse.segment.decisions import (
     DecisionParams,
     DecisionPoint,
     LandmarkTrack,
+    OpeningCue,
     find_decisions,
     landmark_track,
     split_segments,
@@ -103,7 +104,19 @@ def refine(
                         drive,
                         name=f"to-{d.side}-opening-{d.nth}{tag}",
                         goal=None,
-                        landmark=Landmark("opening", d.side, d.nth, d.odometry_m),
+                        landmark=Landmark(
+                            "opening",
+                            d.side,
+                            d.nth,
+                            d.odometry_m,
+                            count=OpeningCount.PASSED if d.cue == OpeningCue.PASSED else OpeningCount.ALL,
+                            within_m=d.within_m,
+                            ahead=None
+                            if d.ahead_open is None
+                            else Ahead.OPEN
+                            if d.ahead_open
+                            else Ahead.CLOSED,
+                        ),
                     )
                 )
             inner.append(

@@ -31,10 +31,13 @@ from lfdfuse.world.model import World, check_pose_free, load_world
 class OffRouteCase:
     """A building, the task its teacher demonstrates, and how long the learned task may take."""
 
-    world: str
+    world: str | World  # a built-in name, or a world in memory (a generated one)
     legs: tuple[Leg, ...]
     max_time_s: float
     order: tuple[str, ...]
+
+    def load(self) -> World:
+        return _world(self.world)
 
 
 CASES = {
@@ -57,11 +60,12 @@ CASES = {
 
 def demonstrate(case: OffRouteCase, *, folder: Path, seed: int = 1) -> Path:
     """The teacher's demo of ``case``, segmented; returns the segmented log."""
+    world = _world(case.world)
     return learn.demonstrate(
         case.legs,
-        world=load_world(case.world),
+        world=world,
         folder=folder,
-        name=f"{case.world}-demo",
+        name=f"{world.name}-demo",
         duration_s=2 * case.max_time_s,
         seed=seed,
     ).segmented
@@ -97,7 +101,7 @@ def run_starts(
 ) -> list[dict[str, Any]]:
     """Execute ``table`` from every start; one row per start."""
     rows = []
-    w = load_world(world or case.world)
+    w = _world(world or case.world)
     for k, start in enumerate(starts):
         res = drive_table(
             ExecuteOptions(world=w, table=table, start=Pose(*start), max_time_s=case.max_time_s, seed=k),
@@ -120,6 +124,10 @@ def run_starts(
             }
         )
     return rows
+
+
+def _world(world: str | World) -> World:
+    return world if isinstance(world, World) else load_world(world)
 
 
 def learn_case(seg: Path, *, subgoals: bool, seed: int = 0) -> FusionTable:

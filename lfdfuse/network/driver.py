@@ -94,6 +94,10 @@ def check_table_world(table: FusionTable, world: World) -> None:
         )
 
 
+#: a heading this far to a side turns the robot (nearly) on the spot: the speed falls with cos θ
+_ON_THE_SPOT_RAD = math.radians(85.0)
+
+
 class NetworkDriver:
     """Drives with a fusion table; optional heading noise makes it a network *teacher*."""
 
@@ -127,6 +131,7 @@ class NetworkDriver:
         self.unseen_ticks = 0
         self.last: Decision | None = None
         self._turn = 0.0
+        self._spin = 0.0  # the side of the last turn on the spot (0: the last tick drove on)
         self.safety = safety
         self.reflex_ticks = 0
         self.last_outputs: Any = None
@@ -158,7 +163,8 @@ class NetworkDriver:
             turn = math.atan2(math.sin(p.theta - th), math.cos(p.theta - th))
         self._odom = (p.x, p.y, p.theta)
         left, right = self.openings.update(observation.reading.ranges_m, step_m, turn)
-        return Cues(left, right, step_m, turn, self.openings.held_turn_rad)
+        ahead_open = self.openings.ahead_m >= self.openings.params.ahead_open_m
+        return Cues(left, right, step_m, turn, self.openings.held_turn_rad, ahead_open)
 
     def _ask(self, dec: Decision, t_ns: int) -> None:
         """Raise a :class:`HelpRequest` when a condition that needs help begins."""
@@ -211,5 +217,14 @@ class NetworkDriver:
             safe = free_heading(heading, reading.ranges_m, self.geometry.angles, self.safety)
             self.reflex_ticks += safe != heading
             heading = safe
+        if abs(heading) >= _ON_THE_SPOT_RAD:
+            # a turn on the spot: keep to the side the last one turned to. Where the pull swings
+            # across the robot from tick to tick (two rows in turn, a wall straight ahead) a turn
+            # left undone by a turn right leaves the robot where it is until the time runs out
+            if self._spin != 0.0 and math.copysign(1.0, heading) != self._spin:
+                heading = math.copysign(abs(heading), self._spin)
+            self._spin = math.copysign(1.0, heading)
+        else:
+            self._spin = 0.0
         v, w = heading_to_command(np.array(heading), self.robot.drive)
         return float(v), float(w)

@@ -1,4 +1,4 @@
-"""Sub-goals at decision points: landmark postconditions of a fusion step (issue 15).
+"""Sub-goals at decision points: landmark postconditions of a fusion step (issues 15, 21).
 
 A person turns into a side corridor because they know the goal is there, long before the
 camera sees it. The learned network reproduces that turn with two extra fusion steps inside
@@ -6,13 +6,22 @@ the goal's step: *drive on to the n-th opening on a side* (the style's weights) 
 it* (the weights the teacher turned with), each ended by a landmark the robot recognises from
 its own sensors — never map coordinates:
 
-``{opening: left, nth: 1, odometry_m: 7.9}``
-    met at the onset of the ``nth`` (or a later) opening on the left since the step began, once
-    the robot has driven at least half of ``odometry_m`` (how far the teacher had driven by
-    then). The order of openings is what carries over to another building; the distance only
-    keeps an opening counted too early (a flicker, a corner taken wide) from triggering the
-    turn-off far before the place — half of it, since distances change from building to
-    building;
+``{opening: left, nth: 2, odometry_m: 23.7, count: passed, ahead: open}``
+    met at the onset of an opening on the left since the step began, once the robot has driven
+    at least half of ``odometry_m`` (how far the teacher had driven by then; half, since
+    distances change from building to building), that is
+
+    - of the opening's *shape* ``ahead`` when given: the way ahead (along the heading the
+      sectors are held at) still ``open`` — a side opening, a junction — or ``closed`` — a
+      corner, the T at the end of a corridor. A corner the route turns round is never the
+      side opening a teacher turned into;
+    - the ``nth`` (or a later one) by ``count``: ``all`` onsets on that side (issue 15, and
+      what a table without ``count`` means), or only the openings ``passed`` by, not turned
+      into (:class:`lfdfuse.behaviors.landmarks.PassedCounter`). Corners met while turning
+      come and go with the line each driver takes; counted, they made the robot take the
+      opening before or after the teacher's from another start (issue 21);
+    - or, with ``within_m``, the first one once ``odometry_m − within_m`` has been driven,
+      whatever came before (an alternative measured in issue 21, not written by ``estimate``);
 ``{turned: left, angle_rad: 1.2}``
     met once the robot has turned that far toward that side from its heading before the turn:
     the heading the opening sectors were held at when the step began (a robot that meets the
@@ -26,10 +35,11 @@ decides from it.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import Any, ClassVar
 
-from lfdfuse.behaviors.landmarks import SIDES
+from lfdfuse.behaviors.landmarks import SIDES, PassedCounter
 from lfdfuse.errors import ConfigError
 
 
@@ -42,16 +52,20 @@ class Cues:
     step_m: float = 0.0
     turn_rad: float = 0.0  # + = left
     held_turn_rad: float = 0.0  # turned since the heading the opening sectors are held at
+    ahead_open: bool = True  # the way ahead, along that held heading, is open
 
 
 @dataclass
 class Progress:
-    """Openings passed, distance driven and heading change since the active step began."""
+    """Openings met, distance driven and heading change since the active step began."""
 
     openings: list[int]  # onsets on (left, right)
     travelled_m: float = 0.0
     turned_rad: float = 0.0
     onset: tuple[bool, bool] = (False, False)  # at this tick
+    ahead_open: bool = True  # at this tick
+    #: openings passed by (not turned into) on each side before this tick
+    passed: PassedCounter = field(default_factory=PassedCounter)
 
     @staticmethod
     def fresh(turned_rad: float = 0.0) -> Progress:
@@ -60,10 +74,30 @@ class Progress:
 
     def add(self, cues: Cues) -> None:
         self.onset = (cues.onset_left, cues.onset_right)
+        self.ahead_open = cues.ahead_open
         self.openings[0] += cues.onset_left
         self.openings[1] += cues.onset_right
         self.travelled_m += cues.step_m
         self.turned_rad += cues.turn_rad
+        self.passed.update(self.onset, cues.step_m, cues.turn_rad, cues.held_turn_rad)
+
+
+class Ahead(StrEnum):
+    """The opening's shape, as the way ahead is at its onset."""
+
+    #: the corridor goes on: a side opening, a junction
+    OPEN = "open"
+    #: it ends: a corner, or the T at the end of a corridor (or a dead end)
+    CLOSED = "closed"
+
+
+class OpeningCount(StrEnum):
+    """Which openings an opening landmark's ``nth`` counts since its step began."""
+
+    #: every onset on the side (issue 15; a table without ``count`` means this)
+    ALL = "all"
+    #: openings passed by, not turned into (:class:`lfdfuse.behaviors.landmarks.PassedCounter`)
+    PASSED = "passed"
 
 
 @dataclass(frozen=True)
@@ -75,25 +109,49 @@ class Landmark:
     nth: int = 1
     odometry_m: float | None = None
     angle_rad: float = 0.0
+    count: OpeningCount = OpeningCount.ALL
+    #: only an opening of this shape is the one (None: any)
+    ahead: Ahead | None = None
+    #: met at the first opening on the side once ``odometry_m − within_m`` has been driven (nth unused)
+    within_m: float | None = None
     #: an opening matches only after this share of ``odometry_m`` has been driven
     ODOMETRY_SHARE: ClassVar[float] = 0.5
 
     def met(self, p: Progress) -> bool:
         s = SIDES.index(self.side)
         if self.kind == "opening":
-            far_enough = self.odometry_m is None or p.travelled_m >= self.ODOMETRY_SHARE * self.odometry_m
-            return p.onset[s] and p.openings[s] >= self.nth and far_enough
+            return self._opening(p, s)
         sign = 1.0 if self.side == "left" else -1.0
         return sign * p.turned_rad >= self.angle_rad
+
+    def _opening(self, p: Progress, s: int) -> bool:
+        """This tick's onset on side ``s`` is the step's opening."""
+        if not p.onset[s]:
+            return False
+        if self.ahead is not None and p.ahead_open != (self.ahead == Ahead.OPEN):
+            return False
+        if self.within_m is not None and self.odometry_m is not None:
+            return p.travelled_m >= self.odometry_m - self.within_m
+        far_enough = self.odometry_m is None or p.travelled_m >= self.ODOMETRY_SHARE * self.odometry_m
+        if self.count == OpeningCount.PASSED:
+            return p.passed.new[s] and p.passed.before[s] + 1 >= self.nth and far_enough
+        return p.openings[s] >= self.nth and far_enough
 
     def describe(self) -> str:
         """One line a person reads: what the robot waits for."""
         if self.kind == "opening":
-            nth = {1: "1st", 2: "2nd", 3: "3rd"}.get(self.nth, f"{self.nth}th")
             odo = (
                 f" (the teacher met it after {self.odometry_m:.1f} m)" if self.odometry_m is not None else ""
             )
-            return f"the {nth} opening on the {self.side}{odo}"
+            shape = {None: "opening", Ahead.OPEN: "side opening", Ahead.CLOSED: "opening where the way ends"}
+            what = shape[self.ahead]
+            if self.within_m is not None and self.odometry_m is not None:
+                return (
+                    f"the first {what} on the {self.side} after {self.odometry_m:.1f} ± {self.within_m:.1f} m"
+                )
+            nth = {1: "1st", 2: "2nd", 3: "3rd"}.get(self.nth, f"{self.nth}th")
+            passed = " (counting those passed by)" if self.count == OpeningCount.PASSED else ""
+            return f"the {nth} {what} on the {self.side}{passed}{odo}"
         return f"turned {math.degrees(self.angle_rad):.0f}° to the {self.side}"
 
     def to_dict(self) -> dict[str, Any]:
@@ -101,6 +159,12 @@ class Landmark:
             d: dict[str, Any] = {"opening": self.side, "nth": self.nth}
             if self.odometry_m is not None:
                 d["odometry_m"] = round(self.odometry_m, 2)
+            if self.count != OpeningCount.ALL:
+                d["count"] = str(self.count)
+            if self.ahead is not None:
+                d["ahead"] = str(self.ahead)
+            if self.within_m is not None:
+                d["within_m"] = round(self.within_m, 2)
             return d
         return {"turned": self.side, "angle_rad": round(self.angle_rad, 3)}
 
@@ -112,7 +176,11 @@ class Landmark:
         if len(kinds) != 1:
             raise ConfigError(f"fusion table: {where}: give exactly one of 'opening' or 'turned'")
         kind = kinds[0]
-        allowed = {"opening", "nth", "odometry_m"} if kind == "opening" else {"turned", "angle_rad"}
+        allowed = (
+            {"opening", "nth", "odometry_m", "count", "within_m", "ahead"}
+            if kind == "opening"
+            else {"turned", "angle_rad"}
+        )
         bad = sorted(set(d) - allowed)
         if bad:
             raise ConfigError(
@@ -130,7 +198,28 @@ class Landmark:
                 isinstance(odo, bool) or not isinstance(odo, (int, float)) or not 0 <= odo < 1e6
             ):
                 raise ConfigError(f"fusion table: {where}.odometry_m must be a distance in metres")
-            return Landmark("opening", side, nth, None if odo is None else float(odo))
+            count = d.get("count", "all")
+            if count not in set(OpeningCount):
+                raise ConfigError(f"fusion table: {where}.count must be 'all' or 'passed'")
+            within = d.get("within_m")
+            if within is not None and (
+                isinstance(within, bool) or not isinstance(within, (int, float)) or not 0 <= within < 1e6
+            ):
+                raise ConfigError(f"fusion table: {where}.within_m must be a distance in metres")
+            ahead = d.get("ahead")
+            if ahead is not None and ahead not in set(Ahead):
+                raise ConfigError(f"fusion table: {where}.ahead must be 'open' or 'closed'")
+            if within is not None and odo is None:
+                raise ConfigError(f"fusion table: {where}.within_m needs odometry_m")
+            return Landmark(
+                "opening",
+                side,
+                nth,
+                None if odo is None else float(odo),
+                count=OpeningCount(count),
+                ahead=None if ahead is None else Ahead(ahead),
+                within_m=None if within is None else float(within),
+            )
         ang = d.get("angle_rad")
         if isinstance(ang, bool) or not isinstance(ang, (int, float)) or not 0 < ang <= 2 * math.pi:
             raise ConfigError(f"fusion table: {where}.angle_rad must be in (0, 2π]")

@@ -27,6 +27,7 @@ SUITES = {
     "world": "lfdfuse.tools.bench_world",
     "estimate": "lfdfuse.tools.bench_estimate",
     "offroute": "lfdfuse.tools.bench_offroute",
+    "generated": "lfdfuse.tools.bench_generated",
     "memory": "lfdfuse.tools.bench_memory",
     "drive": "lfdfuse.tools.bench_drive",
     "keys": "lfdfuse.tools.bench_keys",

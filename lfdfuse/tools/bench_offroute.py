@@ -26,14 +26,14 @@ def run(quick: bool = False) -> list[dict[str, Any]]:
         folder = Path(tmp)
         for case in CASES.values():
             seg = demonstrate(case, folder=folder)
-            starts = perturbed_starts(load_world(case.world), n, seed=15)
+            starts = perturbed_starts(case.load(), n, seed=15)
             for sub in (False, True):
                 table = learn_case(seg, subgoals=sub)
-                label = f"{case.world}/{'subgoals' if sub else 'reactive'}"
+                label = f"{case.load().name}/{'subgoals' if sub else 'reactive'}"
                 rows += run_starts(table, case, starts=starts, folder=folder, label=label)
-                if case.world in TRANSFER:
+                if case.load().name in TRANSFER:
                     # learned in one building, run in another of the same topology and other sizes
-                    other, max_time_s = TRANSFER[case.world]
+                    other, max_time_s = TRANSFER[case.load().name]
                     far = perturbed_starts(load_world(other), n, seed=15)
                     longer = replace(case, max_time_s=max_time_s)
                     rows += run_starts(

@@ -17,7 +17,7 @@ from shapely.ops import unary_union
 Rect = tuple[float, float, float, float]
 
 
-def _walls(rects: list[Rect]) -> list[list[list[float]]]:
+def walls_of(rects: list[Rect]) -> list[list[list[float]]]:
     free = unary_union([box(*r) for r in rects])
     assert isinstance(free, Polygon), "free space must be one connected polygon"
     free = free.simplify(0.0)
@@ -34,7 +34,7 @@ def corridor() -> dict[str, Any]:
     return {
         "name": "corridor",
         "description": "straight 30 m corridor, 2.4 m wide, with four doorways",
-        "walls": _walls(rects),
+        "walls": walls_of(rects),
         "start": [1.0, 1.2, 0.0],
     }
 
@@ -44,7 +44,7 @@ def tee() -> dict[str, Any]:
     return {
         "name": "tee",
         "description": "upper 2 m corridor and wide 4 m lower corridor joined by two T-junctions (paper Fig. 4 right)",
-        "walls": _walls(rects),
+        "walls": walls_of(rects),
         "start": [1.0, 9.0, 0.0],
     }
 
@@ -62,7 +62,7 @@ def building() -> dict[str, Any]:
     return {
         "name": "building",
         "description": "40 x 30 m floor loop, a cross and a middle corridor (T, rotated-T junctions, a crossing), red, green, blue targets (paper Figs. 4 left, 8)",
-        "walls": _walls(rects),
+        "walls": walls_of(rects),
         "targets": [
             # the paper's first physical task: keep left to red (first left turn), centre to
             # green (straight over the crossing), keep right to blue (right at the T, right corner)
@@ -78,7 +78,7 @@ def obstacles() -> dict[str, Any]:
     return {
         "name": "obstacles",
         "description": "20 x 3 m corridor with three obstacles on its centre line and a blocked end (paper Fig. 15)",
-        "walls": _walls([(0, 0, 20, 3)]),
+        "walls": walls_of([(0, 0, 20, 3)]),
         "obstacles": [{"circle": [x, 1.5, 0.3]} for x in (5.0, 10.0, 15.0)],
         "start": [1.0, 1.5, 0.0],
     }
@@ -96,7 +96,7 @@ def ring_spur() -> dict[str, Any]:
     return {
         "name": "ring-spur",
         "description": "32 x 22 m corridor ring with a 7 m dead-end spur off the north corridor; green at its end, out of camera view from the ring (goals off the style's route)",
-        "walls": _walls(rects),
+        "walls": walls_of(rects),
         "targets": [
             {"name": "red", "position": [14.0, 1.2], "radius": 0.25},
             {"name": "green", "position": [22.2, 13.4], "radius": 0.25},
@@ -118,7 +118,7 @@ def ring_spur_large() -> dict[str, Any]:
     return {
         "name": "ring-spur-large",
         "description": "ring-spur's topology at another scale: 44 x 28 m ring, 2.6 m corridors, an 8 m spur farther along (transfer of learned turn-offs)",
-        "walls": _walls(rects),
+        "walls": walls_of(rects),
         "targets": [
             {"name": "red", "position": [20.0, 1.3], "radius": 0.25},
             {"name": "green", "position": [30.3, 18.2], "radius": 0.25},
@@ -143,7 +143,7 @@ def office_room() -> dict[str, Any]:
     return {
         "name": "office-room",
         "description": "40 x 14 m corridor loop with two offices off the south corridor; green in the second, hidden beside its door (goals off the style's route)",
-        "walls": _walls(rects),
+        "walls": walls_of(rects),
         "targets": [
             {"name": "red", "position": [8.0, 1.2], "radius": 0.25},
             {"name": "green", "position": [25.3, -3.0], "radius": 0.25},

@@ -11,8 +11,12 @@ from hypothesis import strategies as st
 from lfdfuse.behaviors.landmarks import (
     OpeningParams,
     OpeningTracker,
+    PassedCounter,
+    PassParams,
+    ahead_range,
     odometry_increments,
     opening_onsets,
+    passed_before,
     sensed_onsets,
     side_openings,
 )
@@ -101,3 +105,70 @@ def test_odometry_increments_ignore_where_the_path_is_and_add_up(
     assert d0[0] == 0.0 and t0[0] == 0.0
     np.testing.assert_allclose(t0[1:], turns[1:], atol=1e-12)  # turns within ±π are kept as they were
     np.testing.assert_allclose(d0[1:], steps[1:], atol=1e-9)  # straight chords of straight steps
+
+
+def _drive(counter: PassedCounter, ticks: int, *, step_m: float = 0.1, turn_rad: float = 0.0) -> None:
+    for _ in range(ticks):
+        counter.update((False, False), step_m, turn_rad, 0.0)
+
+
+def test_openings_driven_past_count_and_openings_turned_into_do_not() -> None:
+    c = PassedCounter()
+    c.update((True, False), 0.1, 0.0, 0.0)  # a junction on the left, driven past
+    assert c.new == (True, False) and c.before == (0, 0)
+    _drive(c, 30)
+    assert c.before == (1, 0)
+    c.update((True, False), 0.1, 0.0, 0.0)  # a corner on the left: the route turns into it
+    _drive(c, 10, step_m=0.05, turn_rad=math.radians(9))
+    _drive(c, 30)
+    assert c.passed == [1, 0] and c.before == (1, 0)
+    c.update((False, True), 0.1, 0.0, 0.0)  # an opening on the right, still undecided: counted
+    c.update((False, False), 0.1, 0.0, 0.0)
+    assert c.before == (1, 1)
+
+
+def test_a_turn_begun_before_the_onset_is_a_turn_into_it() -> None:
+    """The held heading, not the heading at the onset, is where the turn is measured from."""
+    c = PassedCounter()
+    c.update((False, True), 0.1, 0.0, held_turn_rad=-math.radians(30))  # already 30° to the right
+    _drive(c, 5, turn_rad=-math.radians(4))
+    _drive(c, 30)
+    assert c.before == (0, 0)
+
+
+def test_an_onset_flickering_at_an_openings_edge_is_that_opening() -> None:
+    c = PassedCounter(PassParams(merge_m=1.5))
+    c.update((True, False), 0.1, 0.0, 0.0)
+    _drive(c, 5)
+    c.update((True, False), 0.1, 0.0, 0.0)  # 0.6 m on: the same opening
+    assert c.new == (False, False)
+    _drive(c, 30)
+    assert c.before == (1, 0)
+    c.update((True, False), 0.1, 0.0, 0.0)  # 3 m on: the next one
+    assert c.new == (True, False)
+
+
+def test_the_counter_over_a_log_is_the_counter_tick_by_tick() -> None:
+    rng = np.random.default_rng(3)
+    n = 200
+    onsets = rng.random((n, 2)) < 0.05
+    step = rng.uniform(0.0, 0.1, n)
+    turn = rng.normal(0.0, 0.1, n)
+    held = rng.normal(0.0, 0.3, n)
+    before, new = passed_before(onsets, step, turn, held)
+    c = PassedCounter()
+    for i in range(n):
+        c.update((bool(onsets[i, 0]), bool(onsets[i, 1])), float(step[i]), float(turn[i]), float(held[i]))
+        assert tuple(before[i]) == c.before and tuple(new[i]) == c.new
+
+
+def test_the_way_ahead_is_measured_along_the_held_heading() -> None:
+    params = OpeningParams()
+    r = np.full(GEOM.count, 8.0)
+    r[np.abs(GEOM.angles) <= math.radians(12)] = 2.0  # a wall 2 m straight ahead
+    assert ahead_range(r, GEOM, params) == 2.0
+    assert ahead_range(r, GEOM, params, offset_rad=math.radians(45)) == 8.0  # held 45° to the left
+    r[np.abs(GEOM.angles) <= math.radians(12)] = np.inf  # no return: far
+    assert ahead_range(r, GEOM, params) == math.inf
+    behind = ScanGeometry(math.pi / 2, math.pi / 180, 181, 8.0)  # a scanner that does not look ahead
+    assert ahead_range(np.full(181, 1.0), behind, params) == math.inf

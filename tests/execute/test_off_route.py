@@ -19,7 +19,7 @@ import yaml
 from lfdfuse.behaviors.landmarks import OpeningParams, OpeningSensor, opening_onsets, side_openings
 from lfdfuse.errors import ConfigError
 from lfdfuse.evaluate.offroute import CASES, demonstrate, learn_case, perturbed_starts, run_starts
-from lfdfuse.network.landmarks import Cues, Landmark, Progress
+from lfdfuse.network.landmarks import Ahead, Cues, Landmark, Progress
 from lfdfuse.network.runtime import NetworkRuntime
 from lfdfuse.network.table import dump_table, parse_table
 from lfdfuse.sim.sensors import LaserParams
@@ -59,16 +59,39 @@ def _table(landmark: dict) -> dict:  # type: ignore[type-arg]
     }
 
 
-def test_landmark_steps_round_trip_and_match_the_schema() -> None:
-    data = _table({"opening": "left", "nth": 2, "odometry_m": 7.9})
+@pytest.mark.parametrize(
+    "landmark",
+    [
+        {"opening": "left", "nth": 2, "odometry_m": 7.9},
+        {"opening": "left", "nth": 2, "odometry_m": 7.9, "count": "passed"},
+        {"opening": "left", "nth": 2, "odometry_m": 7.9, "within_m": 2.5},
+        {"opening": "left", "nth": 2, "odometry_m": 7.9, "count": "passed", "ahead": "open"},
+    ],
+)
+def test_landmark_steps_round_trip_and_match_the_schema(landmark: dict[str, Any]) -> None:
+    data = _table(landmark)
     jsonschema.validate(data, SCHEMA)
     table = parse_table(data)
     again = yaml.safe_load(dump_table(table))
     jsonschema.validate(again, SCHEMA)
     assert parse_table(again) == table
     inner = table.network.steps[0].network
-    assert inner is not None and inner.steps[0].landmark == Landmark("opening", "left", 2, 7.9)
-    assert "2nd opening on the left" in inner.steps[0].landmark.describe()
+    assert inner is not None and inner.steps[0].landmark == Landmark(
+        "opening",
+        "left",
+        2,
+        7.9,
+        count=landmark.get("count", "all"),
+        within_m=landmark.get("within_m"),
+        ahead=landmark.get("ahead"),
+    )
+    said = inner.steps[0].landmark.describe()
+    if "within_m" in landmark:
+        assert "7.9 ± 2.5 m" in said
+    elif "ahead" in landmark:
+        assert "2nd side opening on the left" in said
+    else:
+        assert "2nd opening on the left" in said
 
 
 @pytest.mark.parametrize(
@@ -79,6 +102,10 @@ def test_landmark_steps_round_trip_and_match_the_schema() -> None:
         {"opening": "left", "turned": "left"},
         {"turned": "left", "angle_rad": -1},
         {"opening": "left", "colour": "red"},
+        {"opening": "left", "count": "some"},
+        {"opening": "left", "ahead": "ajar"},
+        {"opening": "left", "within_m": 2.0},
+        {"opening": "left", "odometry_m": 9.0, "within_m": -1.0},
         "left",
     ],
 )
@@ -142,6 +169,44 @@ def test_sectors_are_held_in_corridors_and_turn_with_the_robot_in_rooms() -> Non
         room.update(np.full(geom.count, 2.4), 0.0, math.radians(9))
     assert corridor.holding and math.isclose(corridor.held_turn_rad, math.radians(90))
     assert not room.holding and room.held_turn_rad == 0.0
+
+
+def test_a_distance_landmark_is_met_at_the_first_opening_on_its_side_past_the_window() -> None:
+    lm = Landmark("opening", "left", nth=3, odometry_m=10.0, within_m=2.0)
+    p = Progress.fresh()
+    p.add(Cues(onset_left=True, step_m=7.9))
+    assert not lm.met(p)  # before 10 − 2 m: not yet, whatever the count
+    p.add(Cues(onset_right=True, step_m=0.2))
+    assert not lm.met(p)  # the other side
+    p.add(Cues(onset_left=True, step_m=0.1))
+    assert lm.met(p)  # the second left onset, but within the window: nth is not used
+
+
+def test_a_landmark_with_a_shape_is_met_only_at_an_opening_of_that_shape() -> None:
+    side = Landmark("opening", "left", ahead=Ahead.OPEN)
+    end = Landmark("opening", "left", ahead=Ahead.CLOSED)
+    p = Progress.fresh()
+    p.add(Cues(onset_left=True, step_m=0.1, ahead_open=False))  # a corner, or a T
+    assert not side.met(p) and end.met(p)
+    p.add(Cues(onset_left=True, step_m=0.1, ahead_open=True))  # the corridor goes on
+    assert side.met(p) and not end.met(p)
+    assert Landmark("opening", "left").met(p)  # no shape: any
+
+
+def test_a_passed_count_ignores_openings_turned_into() -> None:
+    lm = Landmark("opening", "left", nth=2, count="passed")
+    p = Progress.fresh()
+    p.add(Cues(onset_left=True, step_m=0.1))
+    for _ in range(10):  # the route turns into it: a corner
+        p.add(Cues(step_m=0.1, turn_rad=math.radians(9)))
+    for _ in range(30):
+        p.add(Cues(step_m=0.1))
+    p.add(Cues(onset_left=True, step_m=0.1))
+    assert not lm.met(p) and p.openings == [2, 0]  # the 2nd onset, but the 1st passed by
+    for _ in range(30):
+        p.add(Cues(step_m=0.1))
+    p.add(Cues(onset_left=True, step_m=0.1))
+    assert lm.met(p)
 
 
 def test_progress_counts_per_side() -> None:

@@ -87,3 +87,17 @@ def test_commands_obey_the_drive_limits_and_replay_from_the_seed(noise: float) -
     assert driver.ticks == len(a)
     assert driver.last is not None
     assert all(goal in ("red", "blue", "attract_red", "attract_blue") for goal, _ in driver.reached)
+
+
+def test_turns_on_the_spot_keep_to_the_side_they_began_on(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A pull that swings across the robot tick to tick (two rows in turn, a wall ahead) must not
+    leave it turning left and right in place: it keeps turning the way it began."""
+    import math
+
+    import lfdfuse.network.driver as driver_module
+
+    swings = iter([math.radians(100.0), math.radians(-100.0)] * 40)
+    monkeypatch.setattr(driver_module, "free_heading", lambda *args, **kwargs: next(swings))
+    commands, _ = _drive(7, 0.0)
+    assert (commands[:, 0] < 0.05).all()  # on the spot, or nearly
+    assert (commands[:, 1] > 0).all(), commands[:, 1]
