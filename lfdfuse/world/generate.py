@@ -20,7 +20,6 @@ SEED`` prints a world's YAML (``lfdfuse simulate --world`` reads it from a file)
 
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass
 from typing import Any
 
@@ -215,13 +214,3 @@ def generate_offroute(seed: int) -> World:
     data = offroute_world(offroute_spec(seed))
     text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=200)
     return parse_world(data, source=text, origin=data["name"])
-
-
-def main(argv: list[str]) -> None:
-    if len(argv) != 1 or not argv[0].isdigit():
-        raise SystemExit("usage: python -m lfdfuse.world.generate SEED")
-    print(generate_offroute(int(argv[0])).source, end="")
-
-
-if __name__ == "__main__":
-    main(sys.argv[1:])

@@ -22,7 +22,7 @@ WORLDS = (1022, 1025)
 THRESHOLD = 0.9
 
 
-def test_sub_goals_complete_the_task_from_perturbed_starts_in_held_apart_worlds(tmp_path: Path) -> None:
+def test_where_sub_goals_carried_in_held_apart_worlds_they_still_do(tmp_path: Path) -> None:
     assert all(seed in HELD_APART_SEEDS for seed in WORLDS)
     outcomes = [run_generated(seed, folder=tmp_path / str(seed), starts=2) for seed in WORLDS]
     assert all(o.demo_completed for o in outcomes)

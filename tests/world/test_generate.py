@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from pathlib import Path
+
 import yaml
 
 from lfdfuse.world.generate import (
@@ -12,6 +16,7 @@ from lfdfuse.world.generate import (
     offroute_spec,
     offroute_world,
 )
+from lfdfuse.world.model import load_world
 from lfdfuse.world.parse import parse_world
 
 SAMPLE = [*range(0, 40), *range(1000, 1040)]
@@ -59,3 +64,20 @@ def test_the_parameters_vary_over_the_seeds() -> None:
     lengths = [s.spur.length_m for s in specs]
     assert min(widths) < 2.2 and max(widths) > 2.6
     assert min(lengths) < 5.0 and max(lengths) > 8.0
+
+
+def test_a_generated_world_prints_as_a_world_file_simulate_takes(tmp_path: Path) -> None:
+    out = subprocess.run(
+        [sys.executable, "-m", "lfdfuse.tools.generated_world", "1003"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    path = tmp_path / "w.yaml"
+    path.write_text(out.stdout)
+    world, want = load_world(str(path)), generate_offroute(1003)
+    assert world.walls == want.walls and world.targets == want.targets and world.start == want.start
+    bad = subprocess.run(
+        [sys.executable, "-m", "lfdfuse.tools.generated_world", "x"], capture_output=True, text=True
+    )
+    assert bad.returncode == 1 and bad.stderr.count("\n") == 1
