@@ -113,9 +113,7 @@ def refine(
                             within_m=d.within_m,
                             ahead=None
                             if d.ahead_open is None
-                            else Ahead.OPEN
-                            if d.ahead_open
-                            else Ahead.CLOSED,
+                            else (Ahead.OPEN if d.ahead_open else Ahead.CLOSED),
                         ),
                     )
                 )

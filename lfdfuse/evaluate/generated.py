@@ -24,6 +24,7 @@ from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.evaluate.offroute import OffRouteCase, run_starts
 from lfdfuse.execute.starts import perturbed_starts, wilson_interval
 from lfdfuse.log.reader import read_run
+from lfdfuse.network.table import leaf_steps
 from lfdfuse.segment.decisions import DecisionParams
 from lfdfuse.segment.read import SegmentedRun, read_segmented
 from lfdfuse.sim.robot import Pose
@@ -83,11 +84,7 @@ def run_generated(
     for name, params in variants.items():
         tables[name] = refine(plain, run, track, opts=estimate, params=params).table
         landmarks[name] = tuple(
-            f"{s.name}: {s.landmark.describe()}"
-            for step in tables[name].network.steps
-            if step.network is not None
-            for s in step.network.steps
-            if s.landmark is not None
+            f"{s.name}: {s.landmark.describe()}" for s in leaf_steps(tables[name]) if s.landmark is not None
         )
     poses = [
         p.as_tuple()

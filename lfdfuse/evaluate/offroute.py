@@ -37,7 +37,7 @@ class OffRouteCase:
     order: tuple[str, ...]
 
     def load(self) -> World:
-        return _world(self.world)
+        return self.world if isinstance(self.world, World) else load_world(self.world)
 
 
 CASES = {
@@ -60,7 +60,7 @@ CASES = {
 
 def demonstrate(case: OffRouteCase, *, folder: Path, seed: int = 1) -> Path:
     """The teacher's demo of ``case``, segmented; returns the segmented log."""
-    world = _world(case.world)
+    world = case.load()
     return learn.demonstrate(
         case.legs,
         world=world,
@@ -101,7 +101,7 @@ def run_starts(
 ) -> list[dict[str, Any]]:
     """Execute ``table`` from every start; one row per start."""
     rows = []
-    w = _world(world or case.world)
+    w = load_world(world) if world is not None else case.load()
     for k, start in enumerate(starts):
         res = drive_table(
             ExecuteOptions(world=w, table=table, start=Pose(*start), max_time_s=case.max_time_s, seed=k),
@@ -124,10 +124,6 @@ def run_starts(
             }
         )
     return rows
-
-
-def _world(world: str | World) -> World:
-    return world if isinstance(world, World) else load_world(world)
 
 
 def learn_case(seg: Path, *, subgoals: bool, seed: int = 0) -> FusionTable:

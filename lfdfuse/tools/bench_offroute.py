@@ -26,14 +26,15 @@ def run(quick: bool = False) -> list[dict[str, Any]]:
         folder = Path(tmp)
         for case in CASES.values():
             seg = demonstrate(case, folder=folder)
-            starts = perturbed_starts(case.load(), n, seed=15)
+            world = case.load()
+            starts = perturbed_starts(world, n, seed=15)
             for sub in (False, True):
                 table = learn_case(seg, subgoals=sub)
-                label = f"{case.load().name}/{'subgoals' if sub else 'reactive'}"
+                label = f"{world.name}/{'subgoals' if sub else 'reactive'}"
                 rows += run_starts(table, case, starts=starts, folder=folder, label=label)
-                if case.load().name in TRANSFER:
+                if world.name in TRANSFER:
                     # learned in one building, run in another of the same topology and other sizes
-                    other, max_time_s = TRANSFER[case.load().name]
+                    other, max_time_s = TRANSFER[world.name]
                     far = perturbed_starts(load_world(other), n, seed=15)
                     longer = replace(case, max_time_s=max_time_s)
                     rows += run_starts(

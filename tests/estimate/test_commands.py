@@ -36,9 +36,16 @@ KEYS = [0.0, 0.66, -0.66, math.pi / 2, -math.pi / 2]  # straight, arcs, turns in
 
 
 def brute_force(
-    row_vectors: np.ndarray, lo: np.ndarray, hi: np.ndarray, w: np.ndarray, model: FusionModel
+    row_vectors: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    w: np.ndarray,
+    model: FusionModel,
+    sizes: np.ndarray | None = None,
 ) -> float:
-    """``log p(commands | w)`` by numerical integration over the noise, for one weight vector."""
+    """``log p(commands | w)`` by numerical integration over the noise, for one weight vector;
+    each step's lapse spread over its command set of ``sizes[t]`` (default: the ``KEYS``)."""
+    m = np.full(len(lo), len(KEYS)) if sizes is None else sizes
     x = np.linspace(-math.pi, math.pi, 100_001)
     f = np.einsum("tnc,n->tc", row_vectors, w)
     phi = np.arctan2(f[:, 1], f[:, 0])
@@ -50,7 +57,7 @@ def brute_force(
         for t in range(len(phi)):
             h = np.remainder(phi[t] + x + math.pi, 2 * math.pi) - math.pi
             p = np.trapezoid(dens * ((h >= lo[t]) & (h < hi[t])), x)
-            total += math.log((1 - model.lapse) * p + model.lapse / len(KEYS))
+            total += math.log((1 - model.lapse) * p + model.lapse / m[t])
         lls.append(total)
     a = np.array(lls)
     return float(np.log(np.exp(a - a.max()).mean()) + a.max())
@@ -293,32 +300,6 @@ def test_a_situation_met_only_between_decisions_is_no_row() -> None:
 # ------------------------------------------------------------------------------ pooled demos, each its own model
 
 
-def brute_force_sizes(
-    row_vectors: np.ndarray,
-    lo: np.ndarray,
-    hi: np.ndarray,
-    sizes: np.ndarray,
-    w: np.ndarray,
-    model: FusionModel,
-) -> float:
-    """As :func:`brute_force`, each step's lapse spread over its own command set of ``sizes[t]``."""
-    x = np.linspace(-math.pi, math.pi, 100_001)
-    f = np.einsum("tnc,n->tc", row_vectors, w)
-    phi = np.arctan2(f[:, 1], f[:, 0])
-    lls = []
-    for k in model.discrete_kappas:
-        dens = np.exp(k * (np.cos(x) - 1))
-        dens /= np.trapezoid(dens, x)
-        total = 0.0
-        for t in range(len(phi)):
-            h = np.remainder(phi[t] + x + math.pi, 2 * math.pi) - math.pi
-            p = np.trapezoid(dens * ((h >= lo[t]) & (h < hi[t])), x)
-            total += math.log((1 - model.lapse) * p + model.lapse / sizes[t])
-        lls.append(total)
-    a = np.array(lls)
-    return float(np.log(np.exp(a - a.max()).mean()) + a.max())
-
-
 def continuous_brute_force(
     row_vectors: np.ndarray, demo: np.ndarray, w: np.ndarray, model: FusionModel
 ) -> float:
@@ -356,7 +337,7 @@ def test_pooled_keyboards_keep_their_own_command_sets(seed: int) -> None:
     assert isinstance(row, DiscreteRowData)
     w = np.random.default_rng(seed + 10).dirichlet(np.ones(3), size=3)
     got = row_loglik(row, w, FusionModel())
-    want = [brute_force_sizes(v, bounds[:, 0], bounds[:, 1], sizes, wi, FusionModel()) for wi in w]
+    want = [brute_force(v, bounds[:, 0], bounds[:, 1], wi, FusionModel(), sizes) for wi in w]
     assert np.allclose(got, want, atol=2e-3), (got, want)
 
 
@@ -373,7 +354,7 @@ def test_a_row_pooling_a_scripted_demo_and_a_keyboard_reads_each_by_its_own_mode
     cont, disc = arr == 0, arr > 0
     want = [
         continuous_brute_force(v[cont], demo[cont], wi, model)
-        + brute_force_sizes(v[disc], bounds[disc, 0], bounds[disc, 1], arr[disc], wi, model)
+        + brute_force(v[disc], bounds[disc, 0], bounds[disc, 1], wi, model, arr[disc])
         for wi in w
     ]
     assert np.allclose(row_loglik(row, w, model), want, atol=2e-3), (row_loglik(row, w, model), want)
