@@ -21,8 +21,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from lfdfuse.errors import LogError
-from lfdfuse.estimate.pipeline import EstimateOptions, estimate_segments, run_rng
+from lfdfuse.estimate.methods import EstimateOptions
 from lfdfuse.estimate.replay import fused_vectors
+from lfdfuse.estimate.segments import estimate_segments, run_rng
 from lfdfuse.log.reader import Run
 from lfdfuse.network.landmarks import Ahead, Landmark, OpeningCount
 from lfdfuse.network.table import FusionTable, Network, Step
