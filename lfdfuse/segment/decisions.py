@@ -129,7 +129,12 @@ class DecisionParams:
     sectors are held through the corner's turn), and the exit of a spur off the ring's inside
     (the turn on the spot at the mouth ends short of the corridor, and the rest of the step
     drives back in). On the held-apart seeds, never tuned on, 36/60 (seeds 1000-1019, 31
-    without sub-goals) and 38/60 (1020-1039, 21 without): issue 21 asks for 90 %.
+    without sub-goals) and 38/60 (1020-1039, 21 without); on seeds 1040-1079, never looked at,
+    86/120 (43 without): issue 21 asks for 90 %. Changes measured on 1000-1039 in stop 27 —
+    joining divergence runs up to 20 steps apart, looking for the turn 40 steps past them, the
+    opening's shape from up to 25 steps before its onset — completed 71/120 alone (74 before);
+    with the goal step's rows for driving on and the rest, 83, but not the built-in ring-spur;
+    none was kept (see the stop-27 note).
     """
 
     divergence_rad: float = math.radians(15.0)  # demo vs fused heading (smoothed): a different way
