@@ -130,19 +130,24 @@ class DecisionParams:
     (the turn on the spot at the mouth ends short of the corridor, and the rest of the step
     drives back in). On the held-apart seeds, never tuned on, 36/60 (seeds 1000-1019, 31
     without sub-goals) and 38/60 (1020-1039, 21 without); on seeds 1040-1079, never looked at,
-    86/120 (43 without): issue 21 asks for 90 %. Changes measured on 1000-1039 in stop 27 —
-    joining divergence runs up to 20 steps apart, looking for the turn 40 steps past them, the
-    opening's shape from up to 25 steps before its onset — completed 71/120 alone (74 before);
-    with the goal step's rows for driving on and the rest, 83, but not the built-in ring-spur;
-    none was kept (see the stop-27 note).
+    86/120 (43 without): issue 21 asks for 90 %. ``max_gap`` 20, ``rise_steps`` 40 and
+    ``shape_steps`` 25 find decisions these defaults miss (a divergence broken up as the
+    teacher turned, a spur just past a corner, the shape read after a cut-in), and were measured
+    in stop 27 on seeds 1000-1039: 71/120 (74 with the defaults) — every decision more is one
+    more landmark to miss. Kept as parameters, the defaults unchanged.
     """
 
     divergence_rad: float = math.radians(15.0)  # demo vs fused heading (smoothed): a different way
     smooth_steps: int = 5
     min_steps: int = 4  # that long (control periods), gaps of up to ``max_gap`` allowed
     min_area: float = 1.0  # and Σ|divergence| over the run (rad × steps) at least this
+    #: runs of one sign this few steps apart are one divergence (20 joins a divergence that
+    #: broke up while the teacher turned, the fused heading swinging as the BAC changed)
     max_gap: int = 3
     min_turn_rad: float = math.radians(45.0)  # the teacher really turned that way
+    #: ... within this many steps past the divergence (40 finds a teacher who began to diverge
+    #: early, at a spur just past a corner, and turned into it well after)
+    rise_steps: int = 25
     lookback: int = 60  # the opening's onset at most this many steps before the divergence
     lookahead: int = 40  # or this many steps after it (the teacher began to turn early)
     turn_share: float = 0.8  # the turn landmark: this share of the teacher's turn
@@ -167,6 +172,10 @@ class DecisionParams:
     #: the landmark names the opening's shape (the way ahead open or closed at its onset)
     shape: bool = True
     corner_other_steps: int = 25  # the other side open this many steps either side of the onset: a T
+    #: the opening's shape is the way ahead at its onset or this many steps before it (25: a
+    #: teacher who cut into the opening early saw the far wall at the onset, where the robot,
+    #: driving on, sees the corridor go on; 0: at the onset)
+    shape_steps: int = 0
     #: the turn landmark looks at the teacher's turn this many steps past the onset at least ...
     settle_steps: int = 60
     #: ... and asks for at least the largest turn less this (None: the share alone)
@@ -234,10 +243,18 @@ def open_ahead(track: LandmarkTrack, d: int) -> bool:
     return ahead >= track.params.ahead_open_m
 
 
-def _corner(track: LandmarkTrack, side: int, d: int, p: DecisionParams) -> bool:
+def opening_open_ahead(track: LandmarkTrack, d: int, since: int, p: DecisionParams) -> bool:
+    """The shape of the opening met at onset ``d``: the way ahead open at ``d`` or at any of the
+    ``shape_steps`` before it (not before ``since``). Where the teacher cut into the opening, the
+    far side of it closes the view at the onset; a robot driving on meets it with the way ahead
+    open, as the teacher saw it a moment earlier. A corner is closed all along."""
+    return any(open_ahead(track, i) for i in range(max(since, d - p.shape_steps), d + 1))
+
+
+def _corner(track: LandmarkTrack, side: int, d: int, since: int, p: DecisionParams) -> bool:
     """At onset ``d``: the way ahead closed and the other side closed around it — a corner, not
     a junction or a T."""
-    if open_ahead(track, d):
+    if opening_open_ahead(track, d, since, p):
         return False
     lo, hi = max(d - p.corner_other_steps, 0), min(d + p.corner_other_steps + 1, len(track.held_rad))
     flags = side_openings(
@@ -300,7 +317,7 @@ def find_decisions(
                 continue
             s = 0 if sgn > 0 else 1
             ref = max(a - p.lookback, since)
-            turned = sgn * np.cumsum(track.turn_rad[ref + 1 : min(b + 25, hi)])
+            turned = sgn * np.cumsum(track.turn_rad[ref + 1 : min(b + p.rise_steps, hi)])
             if not len(turned) or _largest_rise(turned) < p.min_turn_rad:
                 continue  # the teacher did not really turn that way (from any heading it held before)
             d = _onset_near(track, s, ref, min(b + p.lookahead, hi), a, p.began_rad)
@@ -308,7 +325,7 @@ def find_decisions(
                 continue  # no opening the robot could recognise: not expressible as a landmark
             odo = float(track.step_m[since : d + 1].sum())
             at_start = odo < p.at_start_m
-            if not at_start and p.skip_corners and _corner(track, s, d, p):
+            if not at_start and p.skip_corners and _corner(track, s, d, since, p):
                 continue  # a corner: the teacher turned where there was no other way
             nth = _order(track, s, since, d, p)
             within = _within(track, s, since, d, odo, p) if p.landmark == OpeningCue.DISTANCE else None
@@ -350,7 +367,7 @@ def find_decisions(
                     begin,
                     OpeningCue(p.landmark),
                     within,
-                    open_ahead(track, d) if p.shape and not at_start else None,
+                    opening_open_ahead(track, d, since, p) if p.shape and not at_start else None,
                 )
             )
             since = end

@@ -4,6 +4,7 @@ splitting tiles each goal segment."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 from hypothesis import given, settings
@@ -11,6 +12,7 @@ from hypothesis import strategies as st
 
 from lfdfuse.behaviors.landmarks import OpeningParams
 from lfdfuse.segment.decisions import (
+    DecisionParams,
     DecisionPoint,
     LandmarkTrack,
     _runs,
@@ -113,3 +115,81 @@ def test_split_segments_tiles_each_segment_and_keeps_its_goal_last(
         assert all(a.stop == b.start for a, b in zip(subs, subs[1:], strict=False))
         assert [s.goal for s in subs] == [None] * (len(subs) - 1) + [seg.goal]
         assert len(subs) == 1 + 2 * sum(d.segment == seg.index for d in decisions)
+
+
+def _track(
+    turn: np.ndarray, onset_at: int, side: int = 0, ahead_m: np.ndarray | None = None, other_m: float = 8.0
+) -> LandmarkTrack:
+    """A track of ``turn`` per step, one opening onset on ``side`` at ``onset_at``, the beam
+    straight ahead reaching ``ahead_m`` (8 m where not given) and the beam abeam on the other
+    side ``other_m``; the sectors held at the heading from before the turn."""
+    onsets = np.zeros((N, 2), dtype=bool)
+    onsets[onset_at, side] = True
+    heading = np.cumsum(turn)
+    first = int(np.argmax(turn != 0)) if (turn != 0).any() else N
+    held = np.where(np.arange(N) >= first, heading - (heading[first - 1] if first else 0.0), 0.0)
+    ranges = np.full((N, 3), 8.0)
+    ranges[:, 0 if side == 0 else 2] = other_m  # beams at -90°, 0°, +90°
+    if ahead_m is not None:
+        ranges[:, 1] = ahead_m
+    return LandmarkTrack(onsets, np.full(N, 0.04), turn, held, ranges, GEOM, OpeningParams())
+
+
+def _demo(diverging: list[int], sgn: float = 1.0, deg: float = 60.0) -> np.ndarray:
+    heading = np.zeros(N)
+    heading[diverging] = sgn * math.radians(deg)
+    return np.stack([np.cos(heading), np.sin(heading)], axis=1)
+
+
+def _find(
+    demo: np.ndarray, track: LandmarkTrack, params: DecisionParams = DecisionParams()
+) -> list[DecisionPoint]:
+    fused = np.tile([1.0, 0.0], (N, 1))
+    return find_decisions(
+        segments=SEGS, demo=demo, informative=np.ones(N, bool), fused=fused, track=track, params=params
+    )
+
+
+def test_a_divergence_broken_up_while_the_teacher_turns_is_one_decision() -> None:
+    """Two bursts 10 steps apart, each too small to be a decision alone (issue 21: at a spur the
+    fused heading swings with the BACs as the teacher turns in): one, when runs 20 steps apart
+    are joined."""
+    turn = np.zeros(N)
+    turn[40:60] = math.radians(90.0) / 20
+    track = _track(turn, 38)
+    demo = _demo([40, 50], deg=80.0)  # smoothed: 5 steps of 16° each, Σ 1.4 rad·steps
+    (d,) = _find(demo, track, DecisionParams(min_area=2.0, max_gap=20))
+    assert d.side == "left" and 38 <= d.onset < d.turn_end
+    assert _find(demo, track, DecisionParams(min_area=2.0)) == []  # the default gap: two runs
+
+
+def test_a_turn_begun_well_after_the_divergence_is_still_found() -> None:
+    """The teacher leaves the fused heading at steps 40-45 and turns into the opening 30 steps
+    later (a spur a few metres past a corner): found when the turn is looked for 40 steps on."""
+    turn = np.zeros(N)
+    turn[75:90] = math.radians(90.0) / 15
+    track = _track(turn, 72)
+    demo = _demo(list(range(40, 46)))
+    (d,) = _find(demo, track, DecisionParams(rise_steps=40))
+    assert d.onset == 72 and d.turn_end > 75
+    assert _find(demo, track) == []  # the default: the turn looked for too early
+
+
+def test_the_shape_is_the_way_ahead_before_a_teacher_cut_in() -> None:
+    """A teacher who cut into a side opening saw the far wall at its onset; the way ahead was open
+    a moment before, as a robot driving on sees it. A corner is closed all along."""
+    turn = np.zeros(N)
+    turn[40:60] = math.radians(90.0) / 20
+    cut = np.where(np.arange(N) >= 30, 2.0, 8.0)  # the view ahead closes 8 steps before the onset
+    demo = _demo(list(range(40, 50)))
+    before = DecisionParams(shape_steps=25)
+    (d,) = _find(demo, _track(turn, 38, ahead_m=cut), replace(before, skip_corners=False))
+    assert d.ahead_open is True
+    (d,) = _find(demo, _track(turn, 38, ahead_m=cut), DecisionParams(skip_corners=False))
+    assert d.ahead_open is False  # the default: read at the onset
+    corner = np.full(N, 2.0)
+    (d,) = _find(demo, _track(turn, 38, ahead_m=corner, other_m=1.0), replace(before, skip_corners=False))
+    assert d.ahead_open is False
+    assert _find(demo, _track(turn, 38, ahead_m=corner, other_m=1.0), before) == []  # a corner: no other way
+    assert len(_find(demo, _track(turn, 38, ahead_m=cut, other_m=1.0), before)) == 1  # the cut-in: no corner
+    assert _find(demo, _track(turn, 38, ahead_m=cut, other_m=1.0)) == []  # read at the onset, it looks one
