@@ -220,8 +220,10 @@ def _order(track: LandmarkTrack, side: int, since: int, d: int, p: DecisionParam
         before, new = passed_before(
             track.onsets[cut], track.step_m[cut], track.turn_rad[cut], track.held_rad[cut], p.passing
         )
-        # an onset flickering at the edge of an opening met just before is that opening
-        return int(before[-1, side]) + int(new[-1, side])
+        # an onset flickering at the edge of an opening met just before is that opening; and
+        # at least the first (where the opening met just before was turned into, not passed,
+        # it counts nothing, and ``nth`` 0 is no landmark a table can hold)
+        return max(1, int(before[-1, side]) + int(new[-1, side]))
     return int(track.onsets[since:d, side].sum()) + 1
 
 

@@ -269,6 +269,7 @@ def test_subgoals_read_the_log_once_and_refine_the_table_they_are_given(
     """One pass over the log's messages, one estimate of the whole demo, then only the new
     sub-segment rows."""
     import lfdfuse.estimate.pipeline as pipeline
+    import lfdfuse.estimate.segments as segments
     from lfdfuse import learn
     from lfdfuse.estimate.methods import EstimateOptions, estimate_groups
     from lfdfuse.estimate.smc import SMCParams
@@ -304,7 +305,7 @@ def test_subgoals_read_the_log_once_and_refine_the_table_they_are_given(
 
     monkeypatch.setattr(reader, "make_reader", counted_reader)
     monkeypatch.setattr(learn, "estimate_run", counted("estimate_run", pipeline.estimate_run))
-    monkeypatch.setattr(pipeline, "estimate_groups", groups)
+    monkeypatch.setattr(segments, "estimate_groups", groups)
     fast = EstimateOptions(smc=SMCParams(particles=96))  # the counts, not the weights, are checked
     refined = learn.learn([seg], options=learn.LearnOptions(fast, subgoals=True))
     assert len(passes) == 1, passes

@@ -15,6 +15,7 @@ from lfdfuse.segment.decisions import (
     DecisionParams,
     DecisionPoint,
     LandmarkTrack,
+    _order,
     _runs,
     find_decisions,
     split_segments,
@@ -193,3 +194,17 @@ def test_the_shape_is_the_way_ahead_before_a_teacher_cut_in() -> None:
     assert _find(demo, _track(turn, 38, ahead_m=corner, other_m=1.0), before) == []  # a corner: no other way
     assert len(_find(demo, _track(turn, 38, ahead_m=cut, other_m=1.0), before)) == 1  # the cut-in: no corner
     assert _find(demo, _track(turn, 38, ahead_m=cut, other_m=1.0)) == []  # read at the onset, it looks one
+
+
+def test_an_opening_counts_at_least_first_where_the_one_before_was_turned_into() -> None:
+    """An onset flickering 0.8 m after an opening the teacher turned into is that opening: nothing
+    was passed, and the landmark is the 1st (``nth`` 0 was written to tables that ``execute``
+    then refused: seeds 1043 and 1044 of the generated worlds)."""
+    turn = np.zeros(N)
+    turn[8:18] = math.radians(60.0) / 10
+    onsets = np.zeros((N, 2), dtype=bool)
+    onsets[[5, 25], 0] = True
+    track = LandmarkTrack(
+        onsets, np.full(N, 0.04), turn, np.zeros(N), np.full((N, 3), 8.0), GEOM, OpeningParams()
+    )
+    assert _order(track, 0, 0, 25, DecisionParams()) == 1
