@@ -12,38 +12,17 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.estimate.methods import (
-    EstimateOptions,
-    Method,
-    RowEstimate,
-    estimate_group,
-    estimate_groups,
-    provenance,
-)
+from lfdfuse.estimate.methods import EstimateOptions, Method, estimate_group, estimate_groups, provenance
 from lfdfuse.estimate.model import CommandBins
 from lfdfuse.estimate.pool import same_behaviors
 from lfdfuse.estimate.pooled import estimate_pooled
-from lfdfuse.estimate.segments import Group, SegmentSteps, estimate_segments, groups_of, run_rng, step_names
+from lfdfuse.estimate.segments import groups_of
 from lfdfuse.network.table import FusionTable, Network, default_weights_for
 from lfdfuse.progress import Progress
 from lfdfuse.segment.read import SegmentedRun
 
-__all__ = [
-    "EstimateOptions",
-    "Group",
-    "Method",
-    "RowEstimate",
-    "SegmentSteps",
-    "estimate_group",
-    "estimate_groups",
-    "estimate_pooled",
-    "estimate_run",
-    "estimate_runs",
-    "estimate_segments",
-    "groups_of",
-    "run_rng",
-    "step_names",
-]
+# the options and the row estimators, for callers that import them from here
+__all__ = ["EstimateOptions", "Method", "estimate_group", "estimate_groups", "estimate_run", "estimate_runs"]
 
 
 def estimate_runs(

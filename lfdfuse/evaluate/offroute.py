@@ -124,7 +124,6 @@ def run_starts(
                 # where a run that did not complete was when the time ran out: the step it last
                 # entered (a landmark never met, or a goal step that never got there)
                 "ended_in": "" if rep["completed"] or not rep["steps"] else rep["steps"][-1]["name"],
-                "unseen_bac_fraction": rep["unseen_bac_fraction"],
             }
         )
     return rows
