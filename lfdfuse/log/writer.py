@@ -52,9 +52,18 @@ class LogWriter:
             fd, self._tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".tmp", dir=parent)
         except OSError as exc:
             raise LogError(f"cannot write {self.path}: {exc.strerror}") from exc
-        self._stream = os.fdopen(fd, "wb")
-        self._writer = Writer(self._stream, compression=CompressionType.ZSTD, chunk_size=4 * 1024 * 1024)
-        self._writer.start(profile="", library=f"lfdfuse {__version__}")
+        try:
+            self._stream = os.fdopen(fd, "wb")
+            self._writer = Writer(self._stream, compression=CompressionType.ZSTD, chunk_size=4 * 1024 * 1024)
+            self._writer.start(profile="", library=f"lfdfuse {__version__}")
+        except BaseException:
+            # interrupted here (SIGTERM as the command starts), __exit__ never runs: clean up now
+            if self._stream is not None:
+                self._stream.close()
+            else:
+                os.close(fd)
+            os.unlink(self._tmp)
+            raise
         return self
 
     def add_topic(self, topic: str, schema_name: str) -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import mcap.writer
 import orjson
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -75,3 +76,19 @@ def test_copy_keeps_messages_channels_schemas_and_attachments(tmp_path: Path) ->
             log.copy(raw)
     assert list(iter_messages(src)) == list(iter_messages(dst))
     assert file_info(dst).channels == file_info(src).channels
+
+
+@pytest.mark.parametrize("interrupt", [KeyboardInterrupt, SystemExit])
+def test_a_writer_interrupted_as_it_opens_leaves_no_temp_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, interrupt: type[BaseException]
+) -> None:
+    """SIGTERM (raised as an exception) while the MCAP header is written: ``__exit__`` never runs,
+    so ``__enter__`` cleans up itself (a hostile-corpus case caught it once in CI)."""
+
+    def start(*_args: object, **_kwargs: object) -> None:
+        raise interrupt
+
+    monkeypatch.setattr(mcap.writer.Writer, "start", start)
+    with pytest.raises(interrupt), LogWriter(tmp_path / "run.mcap", metadata={}):
+        pass
+    assert list(tmp_path.iterdir()) == []
