@@ -22,6 +22,10 @@ its own sensors — never map coordinates:
       opening before or after the teacher's from another start (issue 21);
     - or, with ``within_m``, the first one once ``odometry_m − within_m`` has been driven,
       whatever came before (an alternative measured in issue 21, not written by ``estimate``);
+
+    while a step ended by an ``ahead: open`` opening runs, the runtime keeps the fused heading
+    within :data:`~lfdfuse.network.runtime.DRIVE_ON_RAD` of the held heading as long as the way
+    ahead is open: the robot drives past the openings before the one to turn into;
 ``{turned: left, angle_rad: 1.2}``
     met once the robot has turned that far toward that side from its heading before the turn:
     the heading the opening sectors were held at when the step began (a robot that meets the
@@ -116,6 +120,12 @@ class Landmark:
     within_m: float | None = None
     #: an opening matches only after this share of ``odometry_m`` has been driven
     ODOMETRY_SHARE: ClassVar[float] = 0.5
+
+    @property
+    def drives_on(self) -> bool:
+        """A step ended by this landmark drives on along the corridor (the runtime keeps it near
+        the held heading while the way ahead is open): the opening is a side opening."""
+        return self.kind == "opening" and self.ahead == Ahead.OPEN
 
     def met(self, p: Progress) -> bool:
         s = SIDES.index(self.side)

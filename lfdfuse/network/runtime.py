@@ -3,13 +3,16 @@
 Each tick: behaviour outputs → the active step (the first step whose goal is not yet achieved;
 a nested network is active until its last goal is achieved) → the BAC of this instant → that
 step's weights for the BAC, or the default weights when the BAC was never seen in training (the
-step's own ``default_weights`` when it has them, else the table's) → fused vector. Goals are monitored for the active step only, so a task that visits the same
+step's own ``default_weights`` when it has them, else the table's) → fused vector (in a step
+that drives on to a side opening, kept within :data:`DRIVE_ON_RAD` of the held heading while
+the way ahead is open). Goals are monitored for the active step only, so a task that visits the same
 target twice ("A then B then A") needs it reached twice, in order; a goal once achieved stays
 achieved.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,6 +22,12 @@ from lfdfuse.network.landmarks import Cues, Progress
 from lfdfuse.network.table import FusionTable, Network, Step
 
 Path = tuple[int, ...]
+
+#: a drive-on step to a side opening (the way ahead goes on there) keeps the fused heading within
+#: this of the heading the opening sectors are held at, while the way ahead is open: the robot
+#: drives past the openings before the n-th as the teacher did, instead of being drawn into one
+#: by the style's pull toward open space (issue 21: measured on the generated worlds)
+DRIVE_ON_RAD = math.radians(30.0)
 
 
 @dataclass(frozen=True)
@@ -110,6 +119,9 @@ class NetworkRuntime:
         fused = self.fuse(outputs, weights)
         if row is not None and float(np.hypot(*fused)) <= 1e-9:
             fused = self.fuse(outputs, fallback)
+        if step.landmark is not None and step.landmark.drives_on and cues.ahead_open:
+            # drive on past the openings before the one to turn into: along the held heading
+            fused = keep_within(fused, -cues.held_turn_rad, DRIVE_ON_RAD)
         return Decision(step, path, bac, dict(weights), row is None, fused, tuple(achieved_now))
 
     def _step_at(self, path: Path) -> Step:
@@ -146,6 +158,20 @@ class NetworkRuntime:
         for name, w in weights.items():
             v += w * outputs.vectors[0, names.index(name)]
         return v
+
+
+def keep_within(v: np.ndarray, centre_rad: float, half_rad: float) -> np.ndarray:
+    """``v`` turned, its length kept, to within ``half_rad`` of the direction ``centre_rad`` (the
+    nearer edge; ``v`` itself when within, or zero)."""
+    n = float(np.hypot(v[0], v[1]))
+    if n <= 1e-12:
+        return v
+    off = math.atan2(v[1], v[0]) - centre_rad
+    off = math.atan2(math.sin(off), math.cos(off))
+    if abs(off) <= half_rad:
+        return v
+    a = centre_rad + math.copysign(half_rad, off)
+    return np.array([n * math.cos(a), n * math.sin(a)])
 
 
 def step_name_of(path: Path, table: FusionTable) -> str:

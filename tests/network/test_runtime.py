@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -9,7 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lfdfuse.behaviors.primitives import BehaviorOutputs
-from lfdfuse.network.runtime import NetworkRuntime, step_name_of
+from lfdfuse.network.landmarks import Cues
+from lfdfuse.network.runtime import DRIVE_ON_RAD, NetworkRuntime, step_name_of
 from lfdfuse.network.table import FusionTable, parse_table
 
 NAMES = ("avoid", "attract_red", "wander", "attract_blue")
@@ -99,3 +101,51 @@ def test_the_fused_vector_is_the_weighted_sum_of_applicable_outputs(app: list[bo
     expect = sum(w * vec[NAMES.index(n)] for n, w in dec.weights.items())
     if float(np.hypot(*expect)) > 1e-9:
         assert np.allclose(dec.fused, expect)
+
+
+def _drive_on(ahead: str | None) -> FusionTable:
+    """One goal step whose first sub-step drives on to the 1st opening on the left, of shape
+    ``ahead``, with ``wander`` alone."""
+    landmark: dict[str, Any] = {"opening": "left", "nth": 1, "odometry_m": 50.0}
+    if ahead is not None:
+        landmark["ahead"] = ahead
+    step = {
+        "name": "reach-red",
+        "goal": {"target": "red"},
+        "network": {
+            "name": "reach-red",
+            "steps": [
+                {
+                    "name": "to-left-opening-1",
+                    "landmark": landmark,
+                    "fusion": [{"bac": 0b0100, "weights": {"wander": 1.0}}],
+                },
+                {"name": "reach-red", "goal": {"target": "red"}, "fusion": []},
+            ],
+        },
+    }
+    return table(network={"name": "t", "steps": [step]})
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(-3.1, 3.1), st.floats(-1.0, 1.0), st.booleans(), st.sampled_from(["open", "closed", None]))
+def test_a_step_driving_on_to_a_side_opening_keeps_near_the_held_heading(
+    pull: float, held: float, ahead_open: bool, shape: str | None
+) -> None:
+    """Driving on to a side opening (the way ahead goes on there), the fused heading stays within
+    DRIVE_ON_RAD of the held heading while the way ahead is open, its length kept; otherwise (a
+    corner ahead, or an opening where the way ends) the row's fusion is untouched."""
+    vec = np.zeros((4, 2))
+    vec[2] = [2.0 * math.cos(pull), 2.0 * math.sin(pull)]
+    cues = Cues(held_turn_rad=held, ahead_open=ahead_open)
+    dec = NetworkRuntime(_drive_on(shape)).decide(outputs(vec, [False, False, True, False]), set(), cues)
+    assert step_name_of(dec.path, _drive_on(shape)) == "reach-red/to-left-opening-1"
+    assert math.isclose(float(np.hypot(*dec.fused)), 2.0)
+    off = math.atan2(dec.fused[1], dec.fused[0]) + held  # from the held heading (at -held)
+    off = math.atan2(math.sin(off), math.cos(off))
+    raw = math.atan2(math.sin(pull + held), math.cos(pull + held))
+    if ahead_open and shape == "open":
+        assert abs(off) <= DRIVE_ON_RAD + 1e-9
+        assert math.isclose(off, max(-DRIVE_ON_RAD, min(DRIVE_ON_RAD, raw)), abs_tol=1e-9)
+    else:
+        assert np.allclose(dec.fused, vec[2])

@@ -65,7 +65,10 @@ def test_a_turn_off_at_an_opening_is_one_decision_on_that_side() -> None:
 def test_no_decision_where_the_fusion_agrees_without_an_opening_or_without_a_goal() -> None:
     demo, fused, track = _turn_off()
     ok = np.ones(N, bool)
-    assert find_decisions(segments=SEGS, demo=demo, informative=ok, fused=demo, track=track) == []
+    only = DecisionParams(junctions=False)  # the teacher's own turns at junctions: the law below
+    assert (
+        find_decisions(segments=SEGS, demo=demo, informative=ok, fused=demo, track=track, params=only) == []
+    )
     _, _, blind = _turn_off(onset_at=None)
     assert find_decisions(segments=SEGS, demo=demo, informative=ok, fused=fused, track=blind) == []
     tour = (GoalSegment(0, 0, N, None),)
@@ -161,7 +164,8 @@ def test_a_divergence_broken_up_while_the_teacher_turns_is_one_decision() -> Non
     demo = _demo([40, 50], deg=80.0)  # smoothed: 5 steps of 16° each, Σ 1.4 rad·steps
     (d,) = _find(demo, track, DecisionParams(min_area=2.0, max_gap=20))
     assert d.side == "left" and 38 <= d.onset < d.turn_end
-    assert _find(demo, track, DecisionParams(min_area=2.0)) == []  # the default gap: two runs
+    # the default gap: two runs (the teacher's own turn, a junction, left out: it is the next law)
+    assert _find(demo, track, DecisionParams(min_area=2.0, junctions=False)) == []
 
 
 def test_a_turn_begun_well_after_the_divergence_is_still_found() -> None:
@@ -173,7 +177,7 @@ def test_a_turn_begun_well_after_the_divergence_is_still_found() -> None:
     demo = _demo(list(range(40, 46)))
     (d,) = _find(demo, track, DecisionParams(rise_steps=40))
     assert d.onset == 72 and d.turn_end > 75
-    assert _find(demo, track) == []  # the default: the turn looked for too early
+    assert _find(demo, track, DecisionParams(junctions=False)) == []  # the default: looked for too early
 
 
 def test_the_shape_is_the_way_ahead_before_a_teacher_cut_in() -> None:
@@ -208,3 +212,41 @@ def test_an_opening_counts_at_least_first_where_the_one_before_was_turned_into()
         onsets, np.full(N, 0.04), turn, np.zeros(N), np.full((N, 3), 8.0), GEOM, OpeningParams()
     )
     assert _order(track, 0, 0, 25, DecisionParams()) == 1
+
+
+@settings(max_examples=30, deadline=None)  # a pure function; the cores are shared
+@given(
+    st.sampled_from([0, 1]),
+    st.integers(30, 70),
+    st.floats(50.0, 120.0),
+    st.integers(8, 25),
+)
+def test_a_turn_off_the_learned_fusion_follows_is_a_decision_only_with_junctions(
+    side: int, start: int, deg: float, steps: int
+) -> None:
+    """Replayed on the teacher's own track, the learned fusion turns where the teacher turns (it
+    sees the opening the teacher already turns into): no divergence, no decision without
+    ``junctions``. With them (the default) the teacher's own turn off a way that goes on is one, at the opening's onset
+    on the turn's side; off a way that ends (a corner, a T) it is not."""
+    sgn = 1.0 if side == 0 else -1.0
+    turn = np.zeros(N)
+    turn[start : start + steps] = sgn * math.radians(deg) / steps
+    onset = start - 2
+    track = _track(turn, onset, side)
+    heading = np.cumsum(turn)
+    demo = np.stack([np.cos(heading), np.sin(heading)], axis=1)
+
+    def find(track: LandmarkTrack, params: DecisionParams, informative: bool = True) -> list[DecisionPoint]:
+        ok = np.full(N, informative)
+        return find_decisions(
+            segments=SEGS, demo=demo, informative=ok, fused=demo, track=track, params=params
+        )
+
+    assert find(track, DecisionParams(junctions=False)) == []
+    (d,) = find(track, DecisionParams())
+    assert d.side == ("left" if side == 0 else "right") and d.onset == onset and d.nth == 1
+    assert onset < d.turn_end <= start + steps + 1
+    assert d.divergence_rad == 0.0 and d.ahead_open is True
+    ends = _track(turn, onset, side, ahead_m=np.full(N, 2.0))  # the way ahead closed: a corner or a T
+    assert find(ends, DecisionParams()) == []
+    assert find(track, DecisionParams(), informative=False) == []  # the network's turn (a correction log)
