@@ -37,7 +37,8 @@ HELD_APART_SEEDS = range(1000, 2000)
 #: … of which the first 160 have been used: 1000-1039 looked at world by world while landmarks
 #: and the learned steps were changed (stops 26-27), 1040-1079 the bench of stop 27 (a few traced
 #: in stop 28), 1080-1159 stop 28's confirmation runs of variants chosen on tuning seeds (some
-#: traced after). The bench reports the held-apart seeds after them, never run before
+#: traced after). The bench reports the held-apart seeds after them, never run before (its own
+#: 1160-1179 first in stop 28; 1180-1259 were stop 29's confirmation runs, not looked at)
 DEVELOPED_SEEDS = HELD_APART_SEEDS[:160]
 BENCH_SEEDS = HELD_APART_SEEDS[len(DEVELOPED_SEEDS) :]
 
