@@ -209,9 +209,10 @@ class DecisionParams:
     settle_steps: int = 60
     #: ... and asks for at least the largest turn less this (None: the share alone)
     turn_margin_rad: float | None = math.radians(15.0)
-    #: the teacher's own turns at a junction (an opening on the turn's side that is no corner)
-    #: are decisions too, however closely the learned fusion followed them on the demo: the
-    #: fusion replayed on the teacher's track turns where the teacher already turns
+    #: the teacher's own turns off a corridor that goes on (the way ahead open at the onset of
+    #: the opening on the turn's side) are decisions too where no divergence made one, however
+    #: closely the learned fusion followed them on the demo: the fusion replayed on the
+    #: teacher's track turns where the teacher already turns
     junctions: bool = True
 
 
