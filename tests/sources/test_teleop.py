@@ -50,7 +50,14 @@ from lfdfuse.sources.teleop.script import (
     twist_entry,
     write_csv,
 )
-from lfdfuse.sources.teleop.session import SimClock, TeleopOptions, TeleopSession, make_session, teleop
+from lfdfuse.sources.teleop.session import (
+    SimClock,
+    TeleopOptions,
+    TeleopSession,
+    make_session,
+    stop_on_signals,
+    teleop,
+)
 from lfdfuse.sources.teleop.view import ARROWS, render_map
 from lfdfuse.world.model import load_world
 from tests.conftest import ROOT, mcap_check
@@ -242,6 +249,38 @@ def twist(v: float, w: float) -> list[Input]:
             "message", json.dumps({"linear": {"x": v}, "angular": {"z": w}}), "client", "geometry_msgs/Twist"
         )
     ]
+
+
+@pytest.mark.skipif(
+    threading.current_thread() is not threading.main_thread(), reason="signals need the main thread"
+)
+@pytest.mark.parametrize("after_s", [0.05, 0.13, 0.21, 0.34, 0.47])
+def test_a_signal_during_the_wall_clock_wait_ends_the_run_at_the_next_period(
+    tmp_path: Path, after_s: float
+) -> None:
+    """Real SIGINTs through :func:`stop_on_signals` while a real-time run paces itself: the run
+    ends with the signal's name within a period or two and saves its log. (The handler used to
+    set a ``threading.Event`` whose own lock the waiting loop could hold: a rare hang on Ctrl-C.)"""
+    opts = TeleopOptions(world=load_world("building"), input_name="test")
+    session = make_session(opts, inputs=[Fed({0.0: key("i")})])  # the wall clock
+    main, sent = threading.get_ident(), []
+
+    def interrupt() -> None:
+        time.sleep(after_s)
+        while not session.end_reason:  # until it is seen: a burst, as a held Ctrl-C gives
+            sent.append(time.monotonic())
+            signal.pthread_kill(main, signal.SIGINT)
+            time.sleep(0.002)
+
+    th, before = threading.Thread(target=interrupt, daemon=True), signal.getsignal(signal.SIGINT)
+    with stop_on_signals(session):
+        th.start()
+        summary = teleop(opts, session=session, out=tmp_path / "t.mcap")
+        ended_at = time.monotonic()
+    th.join(5)
+    assert summary.ended == "signal SIGINT"
+    assert sent and ended_at - sent[0] < 3 * opts.robot.dt_s + 0.5  # a period or two, and a loaded machine
+    assert (tmp_path / "t.mcap").exists() and signal.getsignal(signal.SIGINT) is before
 
 
 def test_a_key_command_holds_until_the_next_and_the_run_ends_on_esc(tmp_path: Path) -> None:

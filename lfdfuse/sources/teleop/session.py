@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import math
 import signal
-import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
@@ -67,11 +66,12 @@ Authority = Literal["network", "person"]
 
 
 class Clock(Protocol):
-    """Seconds since an arbitrary origin, and a wait that :meth:`TeleopSession.stop` can cut short."""
+    """Seconds since an arbitrary origin, and a wait until a time (never longer than one period:
+    a stop is seen at the next period, so no wait needs to be cut short)."""
 
     def now(self) -> float: ...
 
-    def wait_until(self, t_s: float, stop: threading.Event) -> None: ...
+    def wait_until(self, t_s: float) -> None: ...
 
 
 class WallClock:
@@ -80,10 +80,10 @@ class WallClock:
     def now(self) -> float:
         return time.monotonic()
 
-    def wait_until(self, t_s: float, stop: threading.Event) -> None:
+    def wait_until(self, t_s: float) -> None:
         delay = t_s - time.monotonic()
         if delay > 0:
-            stop.wait(delay)
+            time.sleep(delay)  # a signal's handler runs during it (PEP 475 resumes the rest)
 
 
 class SimClock:
@@ -95,7 +95,7 @@ class SimClock:
     def now(self) -> float:
         return self.t_s
 
-    def wait_until(self, t_s: float, stop: threading.Event) -> None:
+    def wait_until(self, t_s: float) -> None:
         self.t_s = max(self.t_s, t_s)
 
 
@@ -171,8 +171,7 @@ class TeleopSession:
         self.last_input = ""
         self.end_reason = ""
         self.snapshot: Snapshot | None = None
-        self._stop = threading.Event()
-        self._stop_reason = ""
+        self._stop_reason = ""  # set by stop(), read once per period
         self._command = (0.0, 0.0)
         self._twist_at: float | None = None  # clock time of the client command being held
         self._interval_s: float | None = None  # smoothed interval between client commands
@@ -184,10 +183,13 @@ class TeleopSession:
 
     # -- control from other threads or signal handlers ---------------------------------------
     def stop(self, reason: str) -> None:
-        """End the run at the next period (thread- and signal-safe)."""
-        if not self._stop.is_set():
-            self._stop_reason = reason
-            self._stop.set()
+        """End the run at the next period, from another thread or a signal handler.
+
+        It only sets an attribute. A lock (a ``threading.Event``) here deadlocked when a signal's
+        handler ran while the loop held the event's own lock inside its wait: the run never ended.
+        """
+        if not self._stop_reason:
+            self._stop_reason = reason or "stopped"
 
     @property
     def done(self) -> bool:
@@ -217,7 +219,7 @@ class TeleopSession:
         if not self.end_reason:
             if self.network is not None and self.network.done:
                 self._end("task complete", t)
-            elif self._stop.is_set():
+            elif self._stop_reason:
                 self._end(self._stop_reason, t)
             elif self.duration_s is not None and t >= self.duration_s - 1e-9:
                 self._end("duration", t)
@@ -261,7 +263,7 @@ class TeleopSession:
             # fell behind (a stalled terminal, a slow machine): resume the pace from here
             # instead of rushing through the missed periods
             self._t0, self._k0, due = now, k, now
-        self.clock.wait_until(due, self._stop)
+        self.clock.wait_until(due)
         return max(0.0, self.clock.now() - self._t0)
 
     def _apply(self, inp: Input, t: float) -> None:
