@@ -16,17 +16,18 @@ network teacher) demonstrates in a world, and the demo is segmented.
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run, estimate_runs
 from lfdfuse.estimate.subgoals import refine, track_of
+from lfdfuse.execute.check import CHECK_STARTS, DemoWorld, Repair, demo_world, repair
 from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.network.table import FusionTable
 from lfdfuse.progress import Progress, part
-from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, LandmarkTrack
+from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, LandmarkTrack, OpeningCue
 from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.segment.read import SegmentedRun, read_segmented, read_segmented_and_run
 from lfdfuse.sim.robot import Pose
@@ -42,6 +43,10 @@ class LearnOptions:
     estimate: EstimateOptions = field(default_factory=EstimateOptions)
     subgoals: bool = False
     decisions: DecisionParams = field(default_factory=DecisionParams)  # subgoals: what a decision is
+    #: subgoals, a demo with its world: drive the table there from the teacher's start and this
+    #: many perturbed starts, and repair it where it leaves the teacher's path
+    #: (:mod:`lfdfuse.execute.check`); None: no check
+    check_starts: int | None = CHECK_STARTS
 
 
 @dataclass(frozen=True)
@@ -53,6 +58,7 @@ class LearnResult:
     skipped: int  # groups with no informative step (their BAC falls back to the default weights)
     decisions: tuple[DecisionPoint, ...] = ()  # subgoals: the decision points found
     sources: tuple[str, ...] = ()  # the demos, by name
+    repair: Repair | None = None  # subgoals checked in the demo's world: what the check did
 
 
 def learn_run(
@@ -62,8 +68,10 @@ def learn_run(
     track: LandmarkTrack | None = None,
     name: str = "demo",
     progress: Progress | None = None,
+    home: DemoWorld | None = None,
 ) -> LearnResult:
-    """The table of a segmented run in memory; ``track`` (its landmark cues) is needed for sub-goals.
+    """The table of a segmented run in memory; ``track`` (its landmark cues) is needed for sub-goals,
+    ``home`` (where it was driven) for their check.
 
     ``progress`` is told how far learning is, many times over a long estimate. With sub-goals
     the first pass is the first half: the refinement estimates the decided segments again, at
@@ -75,11 +83,52 @@ def learn_run(
     first = part(progress, start=0.0, size=share, total=1.0)
     table, groups, skipped = estimate_run(run, opts=options.estimate, name=name, progress=first)
     decisions: tuple[DecisionPoint, ...] = ()
+    fixed: Repair | None = None
     if options.subgoals and track is not None:
         then = part(progress, start=share, size=1.0 - share, total=1.0)
-        res = refine(table, run, track, opts=options.estimate, params=options.decisions, progress=then)
-        table, decisions = res.table, res.decisions
-    return LearnResult(table, groups, skipped, decisions, (name,))
+        if home is not None and options.check_starts is not None:
+            fixed = subgoals_checked(table, run, track, home, options, progress=then)
+            table, decisions = fixed.table, fixed.decisions
+        else:
+            res = refine(table, run, track, opts=options.estimate, params=options.decisions, progress=then)
+            table, decisions = res.table, res.decisions
+    return LearnResult(table, groups, skipped, decisions, (name,), fixed)
+
+
+def subgoals_checked(
+    table: FusionTable,
+    run: SegmentedRun,
+    track: LandmarkTrack,
+    home: DemoWorld,
+    options: LearnOptions,
+    *,
+    progress: Progress | None = None,
+) -> Repair:
+    """``table`` (the paper's table of ``run``) with sub-goals, checked in the demo's world and
+    repaired where the robot leaves the teacher's path (:func:`lfdfuse.execute.check.repair`)."""
+
+    def refined(
+        forced: Sequence[int], cues: Mapping[int, OpeningCue]
+    ) -> tuple[FusionTable, Sequence[DecisionPoint]]:
+        res = refine(
+            table,
+            run,
+            track,
+            opts=options.estimate,
+            params=options.decisions,
+            forced=forced,
+            cues=cues,
+            progress=progress,
+        )
+        return res.table, res.decisions
+
+    return repair(
+        refined,
+        track=track,
+        home=home,
+        starts=home.starts(options.check_starts or 0, options.estimate.seed),
+        params=options.decisions,
+    )
 
 
 def learn(
@@ -98,12 +147,14 @@ def learn(
         src = demos[0]
         name = Path(src).name
         track: LandmarkTrack | None = None
+        home: DemoWorld | None = None
         if options.subgoals:
             run, raw = read_segmented_and_run(src)
             track = track_of(raw, run, source=str(src))
+            home = demo_world(raw, goals=sum(seg.goal is not None for seg in run.segments))
         else:
             run = read_segmented(src)
-        return learn_run(run, options=options, track=track, name=name, progress=progress)
+        return learn_run(run, options=options, track=track, name=name, progress=progress, home=home)
     if options.subgoals:
         raise ConfigError(
             "sub-goals are learned from one demonstration for now: drop --subgoals to pool demos"

@@ -94,3 +94,6 @@ def estimate_cmd(
     )
     print_table(res.table)
     print_changes(res.table)
+    if res.repair is not None:
+        for line in res.repair.describe():
+            console.print(line, markup=False)

@@ -16,6 +16,7 @@ on the style's route get the same table as before.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -61,6 +62,8 @@ def refine(
     opts: EstimateOptions,
     params: DecisionParams = DecisionParams(),
     progress: Progress | None = None,
+    forced: Sequence[int] = (),
+    cues: Mapping[int, OpeningCue] | None = None,
 ) -> SubgoalResult:
     """``table`` (the paper's table of ``run``) with sub-goals at the run's decision points.
 
@@ -74,6 +77,8 @@ def refine(
         fused=fused_vectors(table, run, np.arange(len(run.t_ns))),
         track=track,
         params=params,
+        forced=forced,
+        cues=cues,
     )
     if not decisions:
         tell(progress, 1.0, 1.0)

@@ -22,6 +22,7 @@ from lfdfuse import learn
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.evaluate.offroute import OffRouteCase, run_starts
+from lfdfuse.execute.check import CHECK_STARTS, demo_world
 from lfdfuse.execute.starts import perturbed_starts, wilson_interval
 from lfdfuse.log.reader import read_run
 from lfdfuse.network.table import leaf_steps
@@ -61,12 +62,15 @@ def run_generated(
     starts: int = 3,
     variants: dict[str, DecisionParams] | None = None,
     estimate: EstimateOptions = EstimateOptions(),
+    check_starts: int | None = CHECK_STARTS,
 ) -> GeneratedOutcome:
     """Demonstrate the three-goal task in the generated world of ``seed``, learn it without
     sub-goals and with them (one table per variant of the decision parameters; default: one,
     ``subgoals``), and run every table from ``starts`` perturbed starts (±0.5 m, ±20°, drawn
-    from the seed, as ``execute --starts``). A world whose teacher does not complete the task
-    has no runs."""
+    from the seed, as ``execute --starts``). The sub-goal tables are checked in the world from
+    the teacher's start and ``check_starts`` others of the learner's own (None: not checked),
+    as ``estimate --subgoals`` does. A world whose teacher does not complete the task has no
+    runs."""
     variants = {"subgoals": DecisionParams()} if variants is None else variants
     world = generate_offroute(seed)
     demo = learn.demonstrate(
@@ -78,11 +82,17 @@ def run_generated(
         return GeneratedOutcome(seed, False, demo.duration_s, max_time_s, {}, ())
     case = OffRouteCase(world, THREE_GOALS, max_time_s, tuple(str(leg.target) for leg in THREE_GOALS))
     plain = learn.learn_run(run, options=learn.LearnOptions(estimate), name=demo.segmented.name).table
-    track = track_of(read_run(demo.segmented), run, source=str(demo.segmented))
+    raw = read_run(demo.segmented)
+    track = track_of(raw, run, source=str(demo.segmented))
+    home = demo_world(raw, goals=sum(seg.goal is not None for seg in run.segments))
     tables = {"reactive": plain}
     landmarks: dict[str, tuple[str, ...]] = {}
     for name, params in variants.items():
-        tables[name] = refine(plain, run, track, opts=estimate, params=params).table
+        if home is not None and check_starts is not None:
+            opts = learn.LearnOptions(estimate, subgoals=True, decisions=params, check_starts=check_starts)
+            tables[name] = learn.subgoals_checked(plain, run, track, home, opts).table
+        else:
+            tables[name] = refine(plain, run, track, opts=estimate, params=params).table
         landmarks[name] = tuple(
             f"{s.name}: {s.landmark.describe()}" for s in leaf_steps(tables[name]) if s.landmark is not None
         )

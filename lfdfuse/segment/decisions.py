@@ -26,6 +26,7 @@ that was earlier (``begin``).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from enum import StrEnum
 
@@ -318,7 +319,7 @@ def _runs(mask: np.ndarray, sign: np.ndarray, max_gap: int) -> list[tuple[int, i
     return out
 
 
-def _teacher_turns(track: LandmarkTrack, lo: int, hi: int, p: DecisionParams) -> list[tuple[int, int, float]]:
+def teacher_turns(track: LandmarkTrack, lo: int, hi: int, p: DecisionParams) -> list[tuple[int, int, float]]:
     """Runs ``(start, stop, side sign)`` in ``[lo, hi)`` where the teacher turned away from the
     held heading by more than ``began_rad``, reaching ``min_turn_rad``."""
     h = track.held_rad[lo:hi]
@@ -339,11 +340,16 @@ def find_decisions(
     fused: np.ndarray,
     track: LandmarkTrack,
     params: DecisionParams = DecisionParams(),
+    forced: Sequence[int] = (),
+    cues: Mapping[int, OpeningCue] | None = None,
 ) -> list[DecisionPoint]:
     """Decision points of the goal segments that end at a goal (a tour has no turn-off to learn).
 
     ``demo (N, 2)`` demonstrated vectors, ``fused (N, 2)`` the segment's learned fusion
-    replayed on the same steps.
+    replayed on the same steps. ``forced``: steps within teacher's turns that are decisions
+    whatever the fusion did and whatever the opening's shape (a rollout of the learned table
+    left the teacher's path there: :mod:`lfdfuse.execute.check`), unless one overlaps them.
+    ``cues``: the landmark cue of the decision at that onset step, instead of ``params``'.
     """
     p = params
     plain = (
@@ -355,7 +361,7 @@ def find_decisions(
             track=track,
             params=replace(p, junctions=False),
         )
-        if p.junctions
+        if p.junctions or forced
         else []
     )
     hd = np.arctan2(demo[:, 1], demo[:, 0])
@@ -377,19 +383,21 @@ def find_decisions(
             for a, b, sgn in _runs(mask, np.sign(e), p.max_gap)
             if b - a >= p.min_steps and float(np.abs(e[a:b]).sum()) >= p.min_area
         ]
-        if p.junctions:  # the teacher's own turns (not the network's: a correction log) where
-            # no divergence made a decision
+        if p.junctions or forced:  # the teacher's own turns (not the network's: a correction
+            # log) where no divergence made a decision
             found = sorted(
                 found
                 + [
                     (a, b, sgn, True)
-                    for a, b, sgn in _teacher_turns(track, lo, hi, p)
+                    for a, b, sgn in teacher_turns(track, lo, hi, p)
                     if b - a >= p.min_steps
                     and informative[a:b].mean() >= 0.5
                     and not any(d.segment == seg.index and a < d.turn_end and d.begin < b for d in plain)
+                    and (p.junctions or any(a <= f < b for f in forced))
                 ]
             )
         for a, b, sgn, own in found:
+            must = own and any(a <= f < b for f in forced)
             if a < since:
                 continue
             s = 0 if sgn > 0 else 1
@@ -400,14 +408,15 @@ def find_decisions(
             d = _onset_near(track, s, ref, min(b + p.lookahead, hi), a, p.began_rad)
             if d is None:
                 continue  # no opening the robot could recognise: not expressible as a landmark
+            q = replace(p, landmark=cues[d]) if cues and d in cues else p
             odo = float(track.step_m[since : d + 1].sum())
             at_start = odo < p.at_start_m
-            if own and (at_start or not opening_open_ahead(track, d, since, p)):
+            if own and not must and (at_start or not opening_open_ahead(track, d, since, p)):
                 continue  # the teacher's own turn is a decision only off a way that goes on
-            if not at_start and p.skip_corners and _corner(track, s, d, since, p):
+            if not at_start and not must and p.skip_corners and _corner(track, s, d, since, p):
                 continue  # a corner: the teacher turned where there was no other way
-            nth = _order(track, s, since, d, p)
-            within = _within(track, s, since, d, odo, p) if p.landmark == OpeningCue.DISTANCE else None
+            nth = _order(track, s, since, d, q)
+            within = _within(track, s, since, d, odo, q) if q.landmark == OpeningCue.DISTANCE else None
             if at_start:
                 d = since  # the turn step is all of it: the robot turns where the goal left it
             # the turn landmark counts from the heading the sectors were held at when the turn
@@ -424,9 +433,16 @@ def find_decisions(
                 want = max(want, from_held.max() - p.turn_margin_rad)
             angle = float(np.clip(want, p.min_angle_rad, p.max_angle_rad))
             reach = np.nonzero(from_held[1:] >= angle)[0]
-            if not len(reach):
-                continue
-            end = d + 1 + int(reach[0])
+            end = d + 1 + int(reach[0]) if len(reach) else hi
+            if must and end + p.min_steps >= hi:
+                # the goal came while the teacher still turned: the turn as far as it went a
+                # moment before the goal, the rest that moment
+                end = hi - p.min_steps
+                if end <= d + 1:
+                    continue
+                angle = float(from_held[end - d])
+                if angle < p.min_angle_rad:
+                    continue
             if end + 1 >= hi:
                 continue  # the goal came first: nothing left to steer after the turn
             div = float(np.abs(raw[a:b][valid[a:b]]).mean())
@@ -444,9 +460,9 @@ def find_decisions(
                     div,
                     at_start,
                     begin,
-                    OpeningCue(p.landmark),
+                    OpeningCue(q.landmark),
                     within,
-                    opening_open_ahead(track, d, since, p) if p.shape and not at_start else None,
+                    opening_open_ahead(track, d, since, p) if p.shape and not at_start and not must else None,
                 )
             )
             since = end

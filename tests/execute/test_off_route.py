@@ -307,7 +307,8 @@ def test_subgoals_read_the_log_once_and_refine_the_table_they_are_given(
     monkeypatch.setattr(learn, "estimate_run", counted("estimate_run", pipeline.estimate_run))
     monkeypatch.setattr(segments, "estimate_groups", groups)
     fast = EstimateOptions(smc=SMCParams(particles=96))  # the counts, not the weights, are checked
-    refined = learn.learn([seg], options=learn.LearnOptions(fast, subgoals=True))
+    # no check in the demo's world here (it may refine again: tests/execute/test_check.py)
+    refined = learn.learn([seg], options=learn.LearnOptions(fast, subgoals=True, check_starts=None))
     assert len(passes) == 1, passes
     assert {"/lfd/behaviors", "/lfd/segment", "/scan", "/pose"} <= set(passes[0]), passes
     assert len(calls["estimate_run"]) == 1

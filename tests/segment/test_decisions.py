@@ -7,6 +7,7 @@ import math
 from dataclasses import replace
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -15,6 +16,7 @@ from lfdfuse.segment.decisions import (
     DecisionParams,
     DecisionPoint,
     LandmarkTrack,
+    OpeningCue,
     _order,
     _runs,
     find_decisions,
@@ -250,3 +252,61 @@ def test_a_turn_off_the_learned_fusion_follows_is_a_decision_only_with_junctions
     ends = _track(turn, onset, side, ahead_m=np.full(N, 2.0))  # the way ahead closed: a corner or a T
     assert find(ends, DecisionParams()) == []
     assert find(track, DecisionParams(), informative=False) == []  # the network's turn (a correction log)
+
+
+@settings(max_examples=30, deadline=None)  # a pure function; the cores are shared
+@given(
+    st.sampled_from([0, 1]),
+    st.integers(30, 70),
+    st.floats(50.0, 120.0),
+    st.integers(8, 25),
+    st.data(),
+)
+def test_a_forced_turn_is_a_decision_whatever_the_way_ahead_and_a_cue_can_be_chosen(
+    side: int, start: int, deg: float, steps: int, data: st.DataObject
+) -> None:
+    """``forced`` (a rollout left the teacher's path in this turn): the teacher's turn is a
+    decision even off a way that ends (a T, where junctions make none), its shape not named;
+    a step outside every turn forces nothing. ``cues`` picks the landmark cue of the decision at
+    an onset, the rest of it unchanged."""
+    sgn = 1.0 if side == 0 else -1.0
+    turn = np.zeros(N)
+    turn[start : start + steps] = sgn * math.radians(deg) / steps
+    onset = start - 2
+    ends = _track(turn, onset, side, ahead_m=np.full(N, 2.0), other_m=8.0)
+    heading = np.cumsum(turn)
+    demo = np.stack([np.cos(heading), np.sin(heading)], axis=1)
+    ok = np.ones(N, bool)
+
+    def find(**kw: object) -> list[DecisionPoint]:
+        return find_decisions(segments=SEGS, demo=demo, informative=ok, fused=demo, track=ends, **kw)  # type: ignore[arg-type]
+
+    assert find() == []
+    k = data.draw(st.integers(start + steps // 2, start + steps - 1))  # in the turn, past its first 8°
+    (d,) = find(forced=[k])
+    assert d.side == ("left" if side == 0 else "right") and d.onset == onset and d.ahead_open is None
+    assert onset < d.turn_end < N
+    assert find(forced=[data.draw(st.integers(0, start - 12))]) == []
+    (e,) = find(forced=[k], cues={onset: OpeningCue.DISTANCE})
+    assert e.cue == OpeningCue.DISTANCE and e.within_m is not None
+    assert (e.onset, e.turn_end, e.angle_rad, e.side) == (d.onset, d.turn_end, d.angle_rad, d.side)
+    assert find(forced=[k], cues={onset + 1: OpeningCue.DISTANCE}) == [d]  # another onset: no change
+
+
+def test_a_forced_turn_the_goal_cuts_short_ends_before_the_goal() -> None:
+    """The teacher still turning when the goal was reached (a spur just round a corner): forced,
+    the turn step ends ``min_steps`` before the goal with the angle turned by then."""
+    turn = np.zeros(N)
+    turn[80:] = np.diff(math.radians(90.0) * (np.arange(41) / 40) ** 2)  # faster and faster, to the goal
+    track = _track(turn, 78, 0, ahead_m=np.full(N, 2.0))
+    heading = np.cumsum(turn)
+    demo = np.stack([np.cos(heading), np.sin(heading)], axis=1)
+    p = DecisionParams()
+    (d,) = find_decisions(
+        segments=SEGS, demo=demo, informative=np.ones(N, bool), fused=demo, track=track, forced=[110]
+    )
+    assert d.turn_end == N - p.min_steps
+    assert d.angle_rad == pytest.approx(track.held_rad[d.turn_end])  # as far as the teacher had turned
+    assert (
+        find_decisions(segments=SEGS, demo=demo, informative=np.ones(N, bool), fused=demo, track=track) == []
+    )  # not forced: the goal came first
