@@ -5,9 +5,10 @@ on the teacher's track: where the replay agrees with the teacher, no decision is
 the teacher's track the fusion already sees what the teacher turned toward; the robot, driving
 on from its own line, may not. :func:`check` drives the table from the demo's start in the
 demo's world (a rollout, as ``execute`` does) and follows the teacher's path in order; where the
-robot leaves it, the teacher's turn there is the missing decision. :func:`repair` adds such
-turns as decisions (:func:`lfdfuse.segment.decisions.find_decisions`'s ``forced``), one at a
-time, and keeps one only if the rollout then follows the teacher further.
+robot leaves it, the teacher's turn there is the missing decision, or the next decision's
+landmark misleads it. :func:`repair` tries such turns as decisions
+(:func:`lfdfuse.segment.decisions.find_decisions`'s ``forced``) and the next decision's other
+landmark cues (its ``cues``), and keeps one only if the rollouts then follow the teacher further.
 """
 
 from __future__ import annotations
@@ -215,7 +216,7 @@ class Repair:
 Refine = Callable[[Sequence[int], Mapping[int, OpeningCue]], tuple[FusionTable, Sequence[DecisionPoint]]]
 
 
-def _segment_of(decisions: Sequence[DecisionPoint], c: Check) -> list[DecisionPoint]:
+def _heading_for(decisions: Sequence[DecisionPoint], c: Check) -> list[DecisionPoint]:
     """The decision the robot was heading for when it left the path: the first one that ends
     after the last point met."""
     if c.missed_at is None:
@@ -261,7 +262,7 @@ def repair(
             step = blame(track, c, params)
             if step is not None and step not in forced:
                 cands.append(((*forced, step), cues))
-            for d in _segment_of(decisions, c):
+            for d in _heading_for(decisions, c):
                 cands += [(forced, {**cues, d.onset: cue}) for cue in OpeningCue if cue != d.cue]
         unique: list[tuple[tuple[int, ...], dict[int, OpeningCue]]] = []
         for cand in cands:
