@@ -27,9 +27,10 @@ from lfdfuse.execute.check import CHECK_STARTS, DemoWorld, Repair, demo_world, r
 from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.network.table import FusionTable
 from lfdfuse.progress import Progress, part
-from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, LandmarkTrack, OpeningCue
+from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
 from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.segment.read import SegmentedRun, read_segmented, read_segmented_and_run
+from lfdfuse.segment.track import LandmarkTrack, OpeningCue
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import Leg

@@ -29,16 +29,9 @@ from lfdfuse.log.reader import Run
 from lfdfuse.network.landmarks import Ahead, Landmark, OpeningCount
 from lfdfuse.network.table import FusionTable, Network, Step
 from lfdfuse.progress import Progress, tell
-from lfdfuse.segment.decisions import (
-    DecisionParams,
-    DecisionPoint,
-    LandmarkTrack,
-    OpeningCue,
-    find_decisions,
-    landmark_track,
-    split_segments,
-)
+from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, find_decisions, split_segments
 from lfdfuse.segment.read import SegmentedRun
+from lfdfuse.segment.track import LandmarkTrack, OpeningCue, landmark_track
 
 
 def track_of(raw: Run, run: SegmentedRun, *, source: str = "the log") -> LandmarkTrack:

@@ -25,7 +25,8 @@ from lfdfuse.files import parse_yaml
 from lfdfuse.log.run import Run
 from lfdfuse.network.driver import NetworkDriver
 from lfdfuse.network.table import FusionTable
-from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, LandmarkTrack, OpeningCue, teacher_turns
+from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
+from lfdfuse.segment.track import LandmarkTrack, OpeningCue, teacher_turns
 from lfdfuse.sim.loop import run
 from lfdfuse.sim.robot import Pose, RobotParams
 from lfdfuse.sim.sensors import SensorParams
@@ -163,7 +164,9 @@ def blame(track: LandmarkTrack, c: Check, params: DecisionParams) -> int | None:
         return None
     turns = [
         (a, b)
-        for a, b, _ in teacher_turns(track, 0, len(track.held_rad), params)
+        for a, b, _ in teacher_turns(
+            track, 0, len(track.held_rad), began_rad=params.began_rad, min_turn_rad=params.min_turn_rad
+        )
         if a <= c.missed_at and b >= c.last_met_at - BLAME_STEPS
     ]
     return max(turns)[0] if turns else None

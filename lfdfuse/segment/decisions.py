@@ -28,88 +28,23 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
-from enum import StrEnum
 
 import numpy as np
 
-from lfdfuse.behaviors.landmarks import (
-    SIDES,
-    OpeningParams,
-    PassParams,
-    ahead_range,
-    odometry_increments,
-    passed_before,
-    sensed_onsets,
-    side_openings,
-)
+from lfdfuse.behaviors.landmarks import SIDES, PassParams
 from lfdfuse.segment.goals import GoalSegment
-from lfdfuse.sim.sensors import ScanGeometry
-
-
-@dataclass(frozen=True)
-class LandmarkTrack:
-    """Landmark cues of every demo step: ``onsets (N, 2)`` (left, right), odometry ``(N,)``,
-    and the scans ``(N, B)`` they came from."""
-
-    onsets: np.ndarray
-    step_m: np.ndarray
-    turn_rad: np.ndarray
-    held_rad: np.ndarray  # (N,) heading turned since the heading the sectors are held at (+ = left)
-    ranges_m: np.ndarray
-    geometry: ScanGeometry
-    params: OpeningParams
-
-
-def landmark_track(
-    ranges_m: np.ndarray, geometry: ScanGeometry, pose: np.ndarray, params: OpeningParams = OpeningParams()
-) -> LandmarkTrack:
-    """Cues from scans ``(N, B)`` and odometry poses ``(N, 3)`` (only their increments are used)."""
-    step_m, turn = odometry_increments(pose)
-    onsets, held = sensed_onsets(ranges_m, geometry, step_m, turn, params)
-    return LandmarkTrack(onsets, step_m, turn, held, np.asarray(ranges_m), geometry, params)
-
-
-def _onset_near(track: LandmarkTrack, side: int, lo: int, hi: int, at: int, tol: float) -> int | None:
-    """The first onset on ``side`` in ``[lo, hi)`` met while the teacher had turned toward that
-    side by more than ``tol`` from the held heading (the opening they turned into: the robot,
-    driving on, meets it there; a later onset as the teacher weaves out of the turn is one the
-    robot may never see), else the onset nearest step ``at`` (the divergence's start).
-
-    The sectors are held at the heading from before a turn (:class:`OpeningSensor`), so the
-    onset is where a robot driving on with the style's weights meets the opening, though the
-    teacher began to turn earlier.
-    """
-    hit = lo + np.nonzero(track.onsets[lo:hi, side])[0]
-    if not len(hit):
-        return None
-    sgn = 1.0 if side == 0 else -1.0
-    turning = hit[sgn * track.held_rad[hit] >= tol]
-    if len(turning):
-        return int(turning[0])
-    return int(hit[np.argmin(np.abs(hit - at))])
-
-
-def _turn_began(heading: np.ndarray, held_rad: np.ndarray, d: int, lo: int, sgn: float, tol: float) -> int:
-    """The first step of the teacher's turn toward ``sgn`` that is under way at step ``d``: the
-    start of the run of steps in ``[lo, d]`` turned more than ``tol`` from ``d``'s held heading."""
-    held = heading[d] - held_rad[d]
-    off = sgn * (heading[lo : d + 1] - held) > tol
-    if not off[-1]:
-        return d
-    before = np.nonzero(~off)[0]
-    return lo + (int(before[-1]) + 1 if len(before) else 0)
-
-
-class OpeningCue(StrEnum):
-    """How a decision's drive-on step recognises its opening: the alternatives measured on the
-    generated off-route worlds (issue 21)."""
-
-    #: the n-th onset on the side since the step began (issue 15)
-    ALL = "all"
-    #: the n-th opening on the side passed by, not turned into (:class:`PassedCounter`)
-    PASSED = "passed"
-    #: the first onset on the side once the teacher's distance less a tolerance has been driven
-    DISTANCE = "distance"
+from lfdfuse.segment.track import (
+    LandmarkTrack,
+    OpeningCue,
+    distance_tolerance,
+    is_corner,
+    onset_near,
+    opening_open_ahead,
+    opening_order,
+    runs,
+    teacher_turns,
+    turn_began,
+)
 
 
 @dataclass(frozen=True)
@@ -245,93 +180,6 @@ def _largest_rise(x: np.ndarray) -> float:
     return float(np.max(x - np.minimum.accumulate(x)))
 
 
-def _order(track: LandmarkTrack, side: int, since: int, d: int, p: DecisionParams) -> int:
-    """The opening's order on its side since ``since``, as the landmark counts it."""
-    if p.landmark == OpeningCue.PASSED:
-        lo = since + 1  # the runtime starts a step's count at the tick after the last was met
-        if d < lo:
-            return 1
-        cut = slice(lo, d + 1)
-        before, new = passed_before(
-            track.onsets[cut], track.step_m[cut], track.turn_rad[cut], track.held_rad[cut], p.passing
-        )
-        # an onset flickering at the edge of an opening met just before is that opening; and
-        # at least the first (where the opening met just before was turned into, not passed,
-        # it counts nothing, and ``nth`` 0 is no landmark a table can hold)
-        return max(1, int(before[-1, side]) + int(new[-1, side]))
-    return int(track.onsets[since:d, side].sum()) + 1
-
-
-def _within(track: LandmarkTrack, side: int, since: int, d: int, odo: float, p: DecisionParams) -> float:
-    """The distance tolerance: a share of ``odo``, at most half the way back to the previous
-    onset on that side since ``since`` (the robot must not take that one), at least the minimum."""
-    prev = np.nonzero(track.onsets[since:d, side])[0]
-    tol = p.within_share * odo
-    if len(prev):
-        gap = float(track.step_m[since + int(prev[-1]) + 1 : d + 1].sum())
-        tol = min(tol, gap / 2)
-    return max(tol, p.within_min_m)
-
-
-def open_ahead(track: LandmarkTrack, d: int) -> bool:
-    """At step ``d`` the way ahead, along the heading the sectors are held at, is open
-    (:func:`ahead_range`, as the live sensor measures it)."""
-    ahead = ahead_range(track.ranges_m[d], track.geometry, track.params, offset_rad=-track.held_rad[d])
-    return ahead >= track.params.ahead_open_m
-
-
-def opening_open_ahead(track: LandmarkTrack, d: int, since: int, p: DecisionParams) -> bool:
-    """The shape of the opening met at onset ``d``: the way ahead open at ``d`` or at any of the
-    ``shape_steps`` before it (not before ``since``). Where the teacher cut into the opening, the
-    far side of it closes the view at the onset; a robot driving on meets it with the way ahead
-    open, as the teacher saw it a moment earlier. A corner is closed all along."""
-    return any(open_ahead(track, i) for i in range(max(since, d - p.shape_steps), d + 1))
-
-
-def _corner(track: LandmarkTrack, side: int, d: int, since: int, p: DecisionParams) -> bool:
-    """At onset ``d``: the way ahead closed and the other side closed around it — a corner, not
-    a junction or a T."""
-    if opening_open_ahead(track, d, since, p):
-        return False
-    lo, hi = max(d - p.corner_other_steps, 0), min(d + p.corner_other_steps + 1, len(track.held_rad))
-    flags = side_openings(
-        track.ranges_m[lo:hi], track.geometry, track.params, offset_rad=-track.held_rad[lo:hi]
-    )
-    return not bool(flags[:, 1 - side].any())
-
-
-def _runs(mask: np.ndarray, sign: np.ndarray, max_gap: int) -> list[tuple[int, int, float]]:
-    """Runs ``(start, stop, side sign)`` of ``mask`` with one sign, bridging short gaps."""
-    out: list[tuple[int, int, float]] = []
-    idx = np.nonzero(mask)[0]
-    if not len(idx):
-        return out
-    a = b = int(idx[0])
-    s = float(sign[a])
-    for i in idx[1:].tolist():
-        if i - b <= max_gap + 1 and float(sign[i]) == s:
-            b = i
-            continue
-        out.append((a, b + 1, s))
-        a = b = i
-        s = float(sign[i])
-    out.append((a, b + 1, s))
-    return out
-
-
-def teacher_turns(track: LandmarkTrack, lo: int, hi: int, p: DecisionParams) -> list[tuple[int, int, float]]:
-    """Runs ``(start, stop, side sign)`` in ``[lo, hi)`` where the teacher turned away from the
-    held heading by more than ``began_rad``, reaching ``min_turn_rad``."""
-    h = track.held_rad[lo:hi]
-    out: list[tuple[int, int, float]] = []
-    for sgn in (1.0, -1.0):
-        off = sgn * h > p.began_rad
-        for a, b, _ in _runs(off, np.full(len(h), sgn), 0):
-            if float((sgn * h[a:b]).max()) >= p.min_turn_rad:
-                out.append((a + lo, b + lo, sgn))
-    return out
-
-
 def find_decisions(
     *,
     segments: tuple[GoalSegment, ...],
@@ -380,7 +228,7 @@ def find_decisions(
         mask = valid[lo:hi] & (np.abs(e) > p.divergence_rad)
         found = [
             (a + lo, b + lo, sgn, False)
-            for a, b, sgn in _runs(mask, np.sign(e), p.max_gap)
+            for a, b, sgn in runs(mask, np.sign(e), p.max_gap)
             if b - a >= p.min_steps and float(np.abs(e[a:b]).sum()) >= p.min_area
         ]
         if p.junctions or forced:  # the teacher's own turns (not the network's: a correction
@@ -389,7 +237,9 @@ def find_decisions(
                 found
                 + [
                     (a, b, sgn, True)
-                    for a, b, sgn in teacher_turns(track, lo, hi, p)
+                    for a, b, sgn in teacher_turns(
+                        track, lo, hi, began_rad=p.began_rad, min_turn_rad=p.min_turn_rad
+                    )
                     if b - a >= p.min_steps
                     and informative[a:b].mean() >= 0.5
                     and not any(d.segment == seg.index and a < d.turn_end and d.begin < b for d in plain)
@@ -405,18 +255,27 @@ def find_decisions(
             turned = sgn * np.cumsum(track.turn_rad[ref + 1 : min(b + p.rise_steps, hi)])
             if not len(turned) or _largest_rise(turned) < p.min_turn_rad:
                 continue  # the teacher did not really turn that way (from any heading it held before)
-            d = _onset_near(track, s, ref, min(b + p.lookahead, hi), a, p.began_rad)
+            d = onset_near(track, s, ref, min(b + p.lookahead, hi), a, p.began_rad)
             if d is None:
                 continue  # no opening the robot could recognise: not expressible as a landmark
             q = replace(p, landmark=cues[d]) if cues and d in cues else p
             odo = float(track.step_m[since : d + 1].sum())
             at_start = odo < p.at_start_m
-            if own and not must and (at_start or not opening_open_ahead(track, d, since, p)):
+            if own and not must and (at_start or not opening_open_ahead(track, d, since, p.shape_steps)):
                 continue  # the teacher's own turn is a decision only off a way that goes on
-            if not at_start and not must and p.skip_corners and _corner(track, s, d, since, p):
+            if (
+                not at_start
+                and not must
+                and p.skip_corners
+                and is_corner(track, s, d, since, shape_steps=p.shape_steps, other_steps=p.corner_other_steps)
+            ):
                 continue  # a corner: the teacher turned where there was no other way
-            nth = _order(track, s, since, d, q)
-            within = _within(track, s, since, d, odo, q) if q.landmark == OpeningCue.DISTANCE else None
+            nth = opening_order(track, s, since, d, q.landmark, q.passing)
+            within = (
+                distance_tolerance(track, s, since, d, odo, share=q.within_share, min_m=q.within_min_m)
+                if q.landmark == OpeningCue.DISTANCE
+                else None
+            )
             if at_start:
                 d = since  # the turn step is all of it: the robot turns where the goal left it
             # the turn landmark counts from the heading the sectors were held at when the turn
@@ -446,7 +305,7 @@ def find_decisions(
             if end + 1 >= hi:
                 continue  # the goal came first: nothing left to steer after the turn
             div = float(np.abs(raw[a:b][valid[a:b]]).mean())
-            begin = _turn_began(heading, track.held_rad, d, max(since, d - p.lookback), sgn, p.began_rad)
+            begin = turn_began(heading, track.held_rad, d, max(since, d - p.lookback), sgn, p.began_rad)
             out.append(
                 DecisionPoint(
                     seg.index,
@@ -462,7 +321,9 @@ def find_decisions(
                     begin,
                     OpeningCue(q.landmark),
                     within,
-                    opening_open_ahead(track, d, since, p) if p.shape and not at_start and not must else None,
+                    opening_open_ahead(track, d, since, p.shape_steps)
+                    if p.shape and not at_start and not must
+                    else None,
                 )
             )
             since = end

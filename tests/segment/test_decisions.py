@@ -12,17 +12,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lfdfuse.behaviors.landmarks import OpeningParams
-from lfdfuse.segment.decisions import (
-    DecisionParams,
-    DecisionPoint,
-    LandmarkTrack,
-    OpeningCue,
-    _order,
-    _runs,
-    find_decisions,
-    split_segments,
-)
+from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, find_decisions, split_segments
 from lfdfuse.segment.goals import GoalSegment
+from lfdfuse.segment.track import LandmarkTrack, OpeningCue, opening_order, runs
 from lfdfuse.sim.sensors import ScanGeometry
 
 N = 120
@@ -86,10 +78,10 @@ def test_runs_cover_the_mask_with_one_sign_each_bridging_short_gaps(
 ) -> None:
     mask = np.array(mask_list, dtype=bool)
     sign = np.random.default_rng(seed).choice([-1.0, 1.0], size=len(mask))
-    runs = _runs(mask, sign, max_gap)
+    found = runs(mask, sign, max_gap)
     covered = np.zeros(len(mask), bool)
     last_stop = -1
-    for a, b, s in runs:
+    for a, b, s in found:
         assert last_stop <= a < b
         last_stop = b
         inside = np.nonzero(mask[a:b])[0] + a
@@ -213,7 +205,7 @@ def test_an_opening_counts_at_least_first_where_the_one_before_was_turned_into()
     track = LandmarkTrack(
         onsets, np.full(N, 0.04), turn, np.zeros(N), np.full((N, 3), 8.0), GEOM, OpeningParams()
     )
-    assert _order(track, 0, 0, 25, DecisionParams()) == 1
+    assert opening_order(track, 0, 0, 25, OpeningCue.PASSED, DecisionParams().passing) == 1
 
 
 @settings(max_examples=30, deadline=None)  # a pure function; the cores are shared
