@@ -164,7 +164,8 @@ class NetworkDriver:
         self._odom = (p.x, p.y, p.theta)
         left, right = self.openings.update(observation.reading.ranges_m, step_m, turn)
         ahead_open = self.openings.ahead_m >= self.openings.params.ahead_open_m
-        return Cues(left, right, step_m, turn, self.openings.held_turn_rad, ahead_open)
+        beside = (self.openings.tracker.inside[0], self.openings.tracker.inside[1])
+        return Cues(left, right, step_m, turn, self.openings.held_turn_rad, ahead_open, beside)
 
     def _ask(self, dec: Decision, t_ns: int) -> None:
         """Raise a :class:`HelpRequest` when a condition that needs help begins."""

@@ -57,6 +57,8 @@ class Cues:
     turn_rad: float = 0.0  # + = left
     held_turn_rad: float = 0.0  # turned since the heading the opening sectors are held at
     ahead_open: bool = True  # the way ahead, along that held heading, is open
+    #: the opening met last on (left, right) is still beside the robot (its onset's tracker state)
+    beside: tuple[bool, bool] = (False, False)
 
 
 @dataclass
@@ -70,6 +72,9 @@ class Progress:
     ahead_open: bool = True  # at this tick
     #: openings passed by (not turned into) on each side before this tick
     passed: PassedCounter = field(default_factory=PassedCounter)
+    #: per side: the opening beside the robot met every condition of the step's landmark at
+    #: its onset but the way ahead being open (:meth:`Landmark.waits`)
+    waiting: list[bool] = field(default_factory=lambda: [False, False])
 
     @staticmethod
     def fresh(turned_rad: float = 0.0) -> Progress:
@@ -84,6 +89,7 @@ class Progress:
         self.travelled_m += cues.step_m
         self.turned_rad += cues.turn_rad
         self.passed.update(self.onset, cues.step_m, cues.turn_rad, cues.held_turn_rad)
+        self.waiting = [w and b for w, b in zip(self.waiting, cues.beside, strict=True)]
 
 
 class Ahead(StrEnum):
@@ -134,12 +140,30 @@ class Landmark:
         sign = 1.0 if self.side == "left" else -1.0
         return sign * p.turned_rad >= self.angle_rad
 
+    def waits(self, p: Progress) -> int | None:
+        """The side of this tick's onset when it is this ``ahead: open`` landmark's opening in
+        all but the way ahead, which reads closed: a robot that veered toward the opening on its
+        way to it (as the style, or the goal in view, pulls) sees the far wall of the opening
+        along the held heading. The opening is the step's if the way ahead reads open while it
+        is still beside the robot (:attr:`Progress.waiting`)."""
+        if self.kind != "opening" or self.ahead != Ahead.OPEN:
+            return None
+        s = SIDES.index(self.side)
+        if not p.onset[s] or p.ahead_open or not self._counted(p, s):
+            return None
+        return s
+
     def _opening(self, p: Progress, s: int) -> bool:
-        """This tick's onset on side ``s`` is the step's opening."""
+        """This tick's onset on side ``s`` is the step's opening, or the opening still beside
+        the robot that waited for the way ahead to open."""
         if not p.onset[s]:
-            return False
+            return p.waiting[s] and p.ahead_open and self.ahead == Ahead.OPEN
         if self.ahead is not None and p.ahead_open != (self.ahead == Ahead.OPEN):
             return False
+        return self._counted(p, s)
+
+    def _counted(self, p: Progress, s: int) -> bool:
+        """This tick's onset on side ``s`` is the one the landmark counts to (shape aside)."""
         if self.within_m is not None and self.odometry_m is not None:
             return p.travelled_m >= self.odometry_m - self.within_m
         far_enough = self.odometry_m is None or p.travelled_m >= self.ODOMETRY_SHARE * self.odometry_m

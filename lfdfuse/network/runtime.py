@@ -148,8 +148,11 @@ class NetworkRuntime:
             step = self._step_at(path[:depth])
             if step.goal is not None and step.goal in reached:
                 return path[:depth]
-        if leaf.landmark is not None and leaf.landmark.met(self.progress):
+        if leaf.landmark.met(self.progress):
             return path
+        side = leaf.landmark.waits(self.progress)
+        if side is not None:
+            self.progress.waiting[side] = True
         return None
 
     def fuse(self, outputs: BehaviorOutputs, weights: dict[str, float]) -> np.ndarray:

@@ -15,6 +15,8 @@ import jsonschema
 import numpy as np
 import pytest
 import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from lfdfuse.behaviors.landmarks import OpeningParams, OpeningSensor, opening_onsets, side_openings
 from lfdfuse.errors import ConfigError
@@ -191,6 +193,44 @@ def test_a_landmark_with_a_shape_is_met_only_at_an_opening_of_that_shape() -> No
     p.add(Cues(onset_left=True, step_m=0.1, ahead_open=True))  # the corridor goes on
     assert side.met(p) and not end.met(p)
     assert Landmark("opening", "left").met(p)  # no shape: any
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.sampled_from(["left", "right"]),
+    st.lists(st.tuples(st.booleans(), st.booleans()), min_size=1, max_size=12),
+)
+def test_a_side_opening_met_with_the_way_ahead_closed_waits_while_it_is_beside_the_robot(
+    side: str, later: list[tuple[bool, bool]]
+) -> None:
+    """An ``ahead: open`` opening whose onset reads the way ahead closed (the robot veered toward
+    it) is met at the first later tick the way ahead reads open while the opening is still
+    beside the robot; never once it has left; an ``ahead: closed`` one never waits."""
+    from lfdfuse.behaviors.primitives import BehaviorOutputs
+
+    s = 0 if side == "left" else 1
+
+    def cue(onset: bool, ahead_open: bool, beside: bool) -> Cues:
+        on = (onset, False) if s == 0 else (False, onset)
+        by = (beside, False) if s == 0 else (False, beside)
+        return Cues(on[0], on[1], 0.05, 0.0, 0.0, ahead_open, by)
+
+    for shape in ("open", "closed"):
+        rt = NetworkRuntime(parse_table(_table({"opening": side, "ahead": shape})))
+        out = BehaviorOutputs(
+            rt.table.behaviors, np.zeros((1, 4, 2)), np.zeros((1, 4), bool), np.zeros((1, 4), bool)
+        )
+        names = [rt.decide(out, set(), cue(True, False, True)).step.name]  # type: ignore[union-attr]
+        names += [rt.decide(out, set(), cue(False, a, b)).step.name for a, b in later]  # type: ignore[union-attr]
+        if shape == "closed":
+            assert names == ["turn"] * (len(later) + 1)  # met at its onset, as before
+            continue
+        # met at the first later tick with the way open and the opening beside the robot at
+        # every tick until then
+        beside = np.cumprod([b for _, b in later]).astype(bool)
+        hits = [i for i, (a, _) in enumerate(later) if a and beside[i]]
+        k = hits[0] if hits else len(later)
+        assert names == ["to"] * (k + 1) + ["turn"] * (len(later) - k)
 
 
 def test_a_passed_count_ignores_openings_turned_into() -> None:
