@@ -16,21 +16,21 @@ network teacher) demonstrates in a world, and the demo is segmented.
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run, estimate_runs
 from lfdfuse.estimate.subgoals import refine, track_of
-from lfdfuse.execute.check import CHECK_STARTS, DemoWorld, Repair, demo_world, repair
+from lfdfuse.execute.check import CHECK_STARTS, Amends, DemoWorld, Repair, demo_world, repair
 from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.network.table import FusionTable
 from lfdfuse.progress import Progress, part
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
 from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.segment.read import SegmentedRun, read_segmented, read_segmented_and_run
-from lfdfuse.segment.track import LandmarkTrack, OpeningCue
+from lfdfuse.segment.track import LandmarkTrack
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import Leg
@@ -108,17 +108,17 @@ def subgoals_checked(
     """``table`` (the paper's table of ``run``) with sub-goals, checked in the demo's world and
     repaired where the robot leaves the teacher's path (:func:`lfdfuse.execute.check.repair`)."""
 
-    def refined(
-        forced: Sequence[int], cues: Mapping[int, OpeningCue]
-    ) -> tuple[FusionTable, Sequence[DecisionPoint]]:
+    def refined(amends: Amends) -> tuple[FusionTable, Sequence[DecisionPoint]]:
         res = refine(
             table,
             run,
             track,
             opts=options.estimate,
             params=options.decisions,
-            forced=forced,
-            cues=cues,
+            forced=amends.forced,
+            cues=dict(amends.cues),
+            whole=amends.whole,
+            rest=amends.rest,
             progress=progress,
         )
         return res.table, res.decisions
@@ -128,6 +128,7 @@ def subgoals_checked(
         track=track,
         home=home,
         starts=home.starts(options.check_starts or 0, options.estimate.seed),
+        segments=tuple((s.start, s.stop) for s in run.segments),
         params=options.decisions,
     )
 

@@ -16,7 +16,7 @@ on the style's route get the same table as before.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -57,11 +57,15 @@ def refine(
     progress: Progress | None = None,
     forced: Sequence[int] = (),
     cues: Mapping[int, OpeningCue] | None = None,
+    whole: Collection[int] = (),
+    rest: Collection[int] = (),
 ) -> SubgoalResult:
     """``table`` (the paper's table of ``run``) with sub-goals at the run's decision points.
 
     Only the sub-segments of goal segments with a decision are estimated; every other step of
-    ``table`` is kept as it is. ``progress`` is told how far the sub-segments' pass is.
+    ``table`` is kept as it is. ``forced``, ``cues``, ``whole``: see :func:`find_decisions`;
+    ``rest``: goal segments whose step after the last turn keeps the goal step's rows of
+    ``table``. ``progress`` is told how far the sub-segments' pass is.
     """
     decisions = find_decisions(
         segments=run.segments,
@@ -72,6 +76,7 @@ def refine(
         params=params,
         forced=forced,
         cues=cues,
+        whole=whole,
     )
     if not decisions:
         tell(progress, 1.0, 1.0)
@@ -125,6 +130,7 @@ def refine(
                 )
             )
         old = steps[seg.index]
-        inner.append(replace(parts[-1], name=old.name))
+        # after the last turn: the rows of what followed it, or (``rest``) the goal step's own
+        inner.append(old if seg.index in rest else replace(parts[-1], name=old.name))
         steps[seg.index] = Step(old.name, old.goal, (), Network(old.name, tuple(inner)))
     return SubgoalResult(replace(table, network=replace(table.network, steps=tuple(steps))), tuple(decisions))

@@ -14,8 +14,8 @@ landmark cues (its ``cues``), and keeps one only if the rollouts then follow the
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -173,13 +173,33 @@ def blame(track: LandmarkTrack, c: Check, params: DecisionParams) -> int | None:
 
 
 @dataclass(frozen=True)
+class Amends:
+    """What a repair changes in how the sub-goals are learned (steps of the demo)."""
+
+    #: the teacher's turns at these steps are decisions (``find_decisions``' ``forced``)
+    forced: tuple[int, ...] = ()
+    #: the decision at this onset recognises its opening by this cue (its ``cues``)
+    cues: tuple[tuple[int, OpeningCue], ...] = ()
+    #: the decisions at these onsets turn the teacher's whole turn (its ``whole``)
+    whole: tuple[int, ...] = ()
+    #: these goal segments end with the goal step's own rows, learned over all of it, not the
+    #: rows of what follows the last decision alone
+    rest: tuple[int, ...] = ()
+
+    def __bool__(self) -> bool:
+        return bool(self.forced or self.cues or self.whole or self.rest)
+
+    def with_cue(self, onset: int, cue: OpeningCue) -> Amends:
+        return replace(self, cues=(*((k, c) for k, c in self.cues if k != onset), (onset, cue)))
+
+
+@dataclass(frozen=True)
 class Repair:
-    """The table kept, its decisions, what was added to them, and every check made."""
+    """The table kept, its decisions, what was amended, and every check made."""
 
     table: FusionTable
     decisions: tuple[DecisionPoint, ...]
-    forced: tuple[int, ...]
-    cues: dict[int, OpeningCue]
+    amends: Amends
     checks: tuple[tuple[Check, ...], ...]  # per table tried, one per start
     kept: tuple[Check, ...]  # the kept table's
     dt_s: float  # the demo's period (steps → seconds)
@@ -187,7 +207,7 @@ class Repair:
 
     @property
     def changed(self) -> bool:
-        return bool(self.forced or self.cues)
+        return bool(self.amends)
 
     def describe(self) -> list[str]:
         """What the check found and did, in a few lines."""
@@ -208,15 +228,23 @@ class Repair:
             )
             return lines
         lines.append(f"  repaired ({len(self.checks) - 1} tried): {said(self.kept)}")
-        lines += [f"  the teacher's turn at {k * self.dt_s:.1f} s is a decision" for k in self.forced]
+        a = self.amends
+        lines += [f"  the teacher's turn at {k * self.dt_s:.1f} s is a decision" for k in a.forced]
         lines += [
             f"  the decision met at {k * self.dt_s:.1f} s recognises its opening by {cue}"
-            for k, cue in self.cues.items()
+            for k, cue in a.cues
+        ]
+        lines += [
+            f"  the decision met at {k * self.dt_s:.1f} s turns the teacher's whole turn" for k in a.whole
+        ]
+        lines += [
+            f"  goal step {k + 1} drives on after its last turn with its own rows, learned over all of it"
+            for k in a.rest
         ]
         return lines
 
 
-Refine = Callable[[Sequence[int], Mapping[int, OpeningCue]], tuple[FusionTable, Sequence[DecisionPoint]]]
+Refine = Callable[[Amends], tuple[FusionTable, Sequence[DecisionPoint]]]
 
 
 def _heading_for(decisions: Sequence[DecisionPoint], c: Check) -> list[DecisionPoint]:
@@ -226,6 +254,27 @@ def _heading_for(decisions: Sequence[DecisionPoint], c: Check) -> list[DecisionP
         return []
     later = [d for d in decisions if d.turn_end >= c.last_met_at and d.since <= c.missed_at + BLAME_STEPS]
     return later[:1]
+
+
+def _turned_at(decisions: Sequence[DecisionPoint], c: Check) -> list[DecisionPoint]:
+    """The decision whose turn the robot had made when it left the path: the last one that
+    began by the last point met and ended before the first one missed."""
+    if c.missed_at is None:
+        return []
+    done = [d for d in decisions if d.onset <= c.last_met_at + BLAME_STEPS and d.turn_end <= c.missed_at]
+    return done[-1:]
+
+
+def _rest_of(decisions: Sequence[DecisionPoint], segments: Sequence[tuple[int, int]], c: Check) -> list[int]:
+    """The goal segment (index into ``segments``, ``(start, stop)`` steps) the robot left the
+    path in, when that was after the segment's last decision."""
+    if c.missed_at is None:
+        return []
+    for k, (start, stop) in enumerate(segments):
+        if start <= c.missed_at < stop:
+            mine = [d for d in decisions if d.segment == k]
+            return [k] if mine and mine[-1].turn_end <= c.missed_at else []
+    return []
 
 
 def score(checks: Sequence[Check]) -> tuple[int, int]:
@@ -245,40 +294,47 @@ def repair(
     track: LandmarkTrack,
     home: DemoWorld,
     starts: Sequence[Pose],
+    segments: Sequence[tuple[int, int]] = (),
     params: DecisionParams = DecisionParams(),
     rounds: int = 3,
     candidates: int = 4,
 ) -> Repair:
-    """``refine(forced, cues)`` → a table and its decisions. Where a rollout (one per start)
-    leaves the teacher's path, try the teacher's turn there as a decision, and the next
-    decision's other landmark cues; keep the best if the rollouts then follow further, and go
-    on from it."""
+    """``refine(amends)`` → a table and its decisions. Where a rollout (one per start) leaves the
+    teacher's path, try (:class:`Amends`) the teacher's turn there as a decision, the next
+    decision's other landmark cues, the teacher's whole turn for the decision just made, and,
+    after a goal segment's last decision (``segments``: the demo's goal segments), the goal
+    step's own rows; keep the best if the rollouts then follow further, and go on from it."""
     world, teacher_xy, max_time_s = home.world, home.teacher_xy, home.max_time_s
-    forced: tuple[int, ...] = ()
-    cues: dict[int, OpeningCue] = {}
-    table, decisions = refine(forced, cues)
+    amends = Amends()
+    table, decisions = refine(amends)
     best = check_all(table, world, starts, teacher_xy, max_time_s)
     checks = [best]
     for _ in range(rounds):
-        cands: list[tuple[tuple[int, ...], dict[int, OpeningCue]]] = []
+        cands: list[Amends] = []
         for c in sorted(best, key=lambda c: c.score):
             step = blame(track, c, params)
-            if step is not None and step not in forced:
-                cands.append(((*forced, step), cues))
+            if step is not None and step not in amends.forced:
+                cands.append(replace(amends, forced=(*amends.forced, step)))
             for d in _heading_for(decisions, c):
-                cands += [(forced, {**cues, d.onset: cue}) for cue in OpeningCue if cue != d.cue]
-        unique: list[tuple[tuple[int, ...], dict[int, OpeningCue]]] = []
+                cands += [amends.with_cue(d.onset, cue) for cue in OpeningCue if cue != d.cue]
+            for d in _turned_at(decisions, c):
+                if d.onset not in amends.whole:
+                    cands.append(replace(amends, whole=(*amends.whole, d.onset)))
+            for k in _rest_of(decisions, segments, c):
+                if k not in amends.rest:
+                    cands.append(replace(amends, rest=(*amends.rest, k)))
+        unique: list[Amends] = []
         for cand in cands:
             if cand not in unique:
                 unique.append(cand)
         found = None
-        for f, q in unique[:candidates]:
-            t, ds = refine(f, q)
+        for a in unique[:candidates]:
+            t, ds = refine(a)
             got = check_all(t, world, starts, teacher_xy, max_time_s)
             checks.append(got)
             if score(got) > score(best):
-                best, found = got, (f, q, t, ds)
+                best, found = got, (a, t, ds)
         if found is None:
             break
-        forced, cues, table, decisions = found
-    return Repair(table, tuple(decisions), forced, cues, tuple(checks), best, home.dt_s, home.goals)
+        amends, table, decisions = found
+    return Repair(table, tuple(decisions), amends, tuple(checks), best, home.dt_s, home.goals)

@@ -26,7 +26,7 @@ that was earlier (``begin``).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -190,6 +190,7 @@ def find_decisions(
     params: DecisionParams = DecisionParams(),
     forced: Sequence[int] = (),
     cues: Mapping[int, OpeningCue] | None = None,
+    whole: Collection[int] = (),
 ) -> list[DecisionPoint]:
     """Decision points of the goal segments that end at a goal (a tour has no turn-off to learn).
 
@@ -198,6 +199,8 @@ def find_decisions(
     whatever the fusion did and whatever the opening's shape (a rollout of the learned table
     left the teacher's path there: :mod:`lfdfuse.execute.check`), unless one overlaps them.
     ``cues``: the landmark cue of the decision at that onset step, instead of ``params``'.
+    ``whole``: onset steps of decisions whose turn landmark is the teacher's whole turn (no
+    share, no margin short of it; the turn ended short left the robot facing the way back).
     """
     p = params
     plain = (
@@ -278,19 +281,21 @@ def find_decisions(
             )
             if at_start:
                 d = since  # the turn step is all of it: the robot turns where the goal left it
+            if d in whole:  # keyed by the decision's onset as written
+                q = replace(q, turn_share=1.0, turn_margin_rad=0.0)
             # the turn landmark counts from the heading the sectors were held at when the turn
             # step began (the heading before the turn, for teacher and robot alike, however
             # early either began to turn): this share of the teacher's largest turn from it
             heading = np.cumsum(track.turn_rad)
-            look = min(max(b + 25, d + p.settle_steps), hi)
+            look = min(max(b + 25, d + q.settle_steps), hi)
             from_held = sgn * (heading[d:look] - heading[d] + track.held_rad[d])
             # ... and at least ``turn_after_rad`` beyond where the teacher had turned at the onset
             # (met mid-turn, a share of the whole would leave the step a sliver of the turn), but
             # never beyond the teacher's whole turn
-            want = max(p.turn_share * from_held.max(), min(from_held[0] + p.turn_after_rad, from_held.max()))
-            if p.turn_margin_rad is not None:
-                want = max(want, from_held.max() - p.turn_margin_rad)
-            angle = float(np.clip(want, p.min_angle_rad, p.max_angle_rad))
+            want = max(q.turn_share * from_held.max(), min(from_held[0] + q.turn_after_rad, from_held.max()))
+            if q.turn_margin_rad is not None:
+                want = max(want, from_held.max() - q.turn_margin_rad)
+            angle = float(np.clip(want, q.min_angle_rad, q.max_angle_rad))
             reach = np.nonzero(from_held[1:] >= angle)[0]
             end = d + 1 + int(reach[0]) if len(reach) else hi
             if must and end + p.min_steps >= hi:
@@ -300,7 +305,7 @@ def find_decisions(
                 if end <= d + 1:
                     continue
                 angle = float(from_held[end - d])
-                if angle < p.min_angle_rad:
+                if angle < q.min_angle_rad:
                     continue
             if end + 1 >= hi:
                 continue  # the goal came first: nothing left to steer after the turn

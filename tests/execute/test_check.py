@@ -13,8 +13,23 @@ from hypothesis import strategies as st
 
 from lfdfuse import learn
 from lfdfuse.evaluate.generated import THREE_GOALS
-from lfdfuse.execute.check import RADIUS_M, SPACING_M, demo_world, follow, path_points, rollout, score
+from lfdfuse.execute.check import (
+    BLAME_STEPS,
+    RADIUS_M,
+    SPACING_M,
+    Amends,
+    Check,
+    _rest_of,
+    _turned_at,
+    demo_world,
+    follow,
+    path_points,
+    rollout,
+    score,
+)
 from lfdfuse.log.reader import read_run
+from lfdfuse.segment.decisions import DecisionPoint
+from lfdfuse.segment.track import OpeningCue
 from lfdfuse.world.generate import generate_offroute
 from tests.conftest import ROOT
 
@@ -73,7 +88,7 @@ def test_a_table_that_leaves_the_teacher_in_the_demo_world_is_repaired(tmp_path:
     demo = learn.demonstrate(THREE_GOALS, world=world, folder=tmp_path, name="d", duration_s=900.0, seed=1)
     res = learn.learn([demo.segmented], options=learn.LearnOptions(subgoals=True, check_starts=0))
     rep = res.repair
-    assert rep is not None and rep.changed and rep.forced
+    assert rep is not None and rep.changed and rep.amends.forced
     (before,), (after,) = rep.checks[0], rep.kept
     assert before.goals < 3 and before.missed_at is not None
     assert after.goals == 3 and score(rep.kept) > score(rep.checks[0])
@@ -93,3 +108,59 @@ def test_only_a_demo_lfdfuse_drove_has_a_world_to_check_in(tmp_path: Path) -> No
     assert demo_world(replace(raw, world_yaml=None), goals=0) is None
     assert demo_world(replace(raw, metadata={**raw.metadata, "command": "import"}), goals=0) is None
     assert demo_world(replace(raw, world_yaml="walls: [oops"), goals=0) is None
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(st.integers(20, 200), min_size=1, max_size=4),
+    st.lists(st.tuples(st.integers(0, 3), st.integers(0, 150), st.integers(5, 60)), max_size=6),
+    st.integers(0, 800),
+    st.integers(0, 120),
+)
+def test_whole_turn_and_rest_blame_the_decision_made_and_the_segment_left(
+    lengths: list[int], raw: list[tuple[int, int, int]], missed: int, back: int
+) -> None:
+    """Where the robot left the path after a turn: ``_turned_at`` names the last decision begun
+    by the last point met and ended before the first one missed; ``_rest_of`` the goal segment
+    the robot left it in, only when that was after the segment's last decision."""
+    bounds = np.concatenate([[0], np.cumsum(lengths)]).tolist()
+    segments = list(zip(bounds[:-1], bounds[1:], strict=True))
+    decisions = []  # in time order, each turn ended before the next decision (as found)
+    cursor = [lo for lo, _ in segments]
+    for k, gap, dur in raw:
+        if k >= len(segments) or cursor[k] + gap % 20 + dur >= segments[k][1]:
+            continue
+        onset = cursor[k] + gap % 20
+        decisions.append(DecisionPoint(k, "left", onset, onset + dur, 1, cursor[k], 1.0, 1.0, 0.5))
+        cursor[k] = onset + dur
+    decisions.sort(key=lambda d: d.onset)
+    last = max(missed - back, 0)
+    c = Check(goals=0, met=1, points=9, missed_at=missed, last_met_at=last)
+
+    def made(d: DecisionPoint) -> bool:
+        return d.onset <= last + BLAME_STEPS and d.turn_end <= missed
+
+    turned = _turned_at(decisions, c)
+    if turned:
+        (d,) = turned
+        assert made(d) and not any(made(e) for e in decisions[decisions.index(d) + 1 :])
+    else:
+        assert not any(made(e) for e in decisions)
+    rest = _rest_of(decisions, segments, c)
+    inside = [k for k, (lo, hi) in enumerate(segments) if lo <= missed < hi]
+    if rest:
+        (k,) = rest
+        assert inside == [k]
+        assert all(d.turn_end <= missed for d in decisions if d.segment == k)
+        assert any(d.segment == k for d in decisions)
+    elif inside:
+        mine = [d for d in decisions if d.segment == inside[0]]
+        assert not mine or mine[-1].turn_end > missed
+    followed = Check(goals=3, met=9, points=9, missed_at=None, last_met_at=last)
+    assert _turned_at(decisions, followed) == [] and _rest_of(decisions, segments, followed) == []
+
+
+def test_amends_say_what_they_change_and_a_cue_replaces_the_one_before() -> None:
+    assert not Amends() and Amends(rest=(1,)) and Amends(whole=(5,))
+    a = Amends().with_cue(7, OpeningCue.ALL).with_cue(9, OpeningCue.PASSED).with_cue(7, OpeningCue.DISTANCE)
+    assert dict(a.cues) == {7: OpeningCue.DISTANCE, 9: OpeningCue.PASSED}

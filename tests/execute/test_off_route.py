@@ -363,3 +363,33 @@ def test_subgoals_read_the_log_once_and_refine_the_table_they_are_given(
         else:
             assert a == b, f"step {i} has no decision: refine keeps it as given"
     assert refined.table.default_weights == plain.default_weights
+
+
+def test_rest_keeps_the_goal_steps_own_rows_after_its_last_turn(office: tuple[Path, Path]) -> None:
+    """``refine(rest=[k])``: goal step ``k`` ends with the paper's step of the whole goal segment
+    (the table it was given) instead of rows learned after its last turn; nothing else changes."""
+    from lfdfuse import learn
+    from lfdfuse.estimate.pipeline import EstimateOptions
+    from lfdfuse.estimate.subgoals import refine, track_of
+    from lfdfuse.log.reader import read_run
+    from lfdfuse.segment.read import read_segmented
+
+    _tmp, seg = office
+    run = read_segmented(seg)
+    plain = learn.learn_run(run).table
+    track = track_of(read_run(seg), run)
+    a = refine(plain, run, track, opts=EstimateOptions())
+    decided = sorted({d.segment for d in a.decisions})
+    assert decided
+    k = decided[0]
+    b = refine(plain, run, track, opts=EstimateOptions(), rest=[k])
+    assert b.decisions == a.decisions
+    for i, (sa, sb, sp) in enumerate(
+        zip(a.table.network.steps, b.table.network.steps, plain.network.steps, strict=True)
+    ):
+        if i != k:
+            assert sb == sa
+            continue
+        assert sa.network is not None and sb.network is not None
+        assert sb.network.steps[:-1] == sa.network.steps[:-1]
+        assert sb.network.steps[-1] == sp != sa.network.steps[-1]

@@ -283,6 +283,11 @@ def test_a_forced_turn_is_a_decision_whatever_the_way_ahead_and_a_cue_can_be_cho
     assert e.cue == OpeningCue.DISTANCE and e.within_m is not None
     assert (e.onset, e.turn_end, e.angle_rad, e.side) == (d.onset, d.turn_end, d.angle_rad, d.side)
     assert find(forced=[k], cues={onset + 1: OpeningCue.DISTANCE}) == [d]  # another onset: no change
+    # ``whole``: the decision at that onset turns the teacher's whole turn (from the held heading)
+    (w,) = find(forced=[k], whole=[onset])
+    assert w.angle_rad >= d.angle_rad and w.turn_end >= d.turn_end
+    assert w.angle_rad == pytest.approx(min(math.radians(deg), math.radians(150)), abs=1e-6)
+    assert find(forced=[k], whole=[onset + 1]) == [d]
 
 
 def test_a_forced_turn_the_goal_cuts_short_ends_before_the_goal() -> None:
