@@ -14,7 +14,9 @@ its own sensors — never map coordinates:
     - of the opening's *shape* ``ahead`` when given: the way ahead (along the heading the
       sectors are held at) still ``open`` — a side opening, a junction — or ``closed`` — a
       corner, the T at the end of a corridor. A corner the route turns round is never the
-      side opening a teacher turned into;
+      side opening a teacher turned into. A side opening whose onset reads the way ahead
+      closed (the robot veered toward it and sees its far wall) is the one if the way ahead
+      reads open while the opening is still beside the robot;
     - the ``nth`` (or a later one) by ``count``: ``all`` onsets on that side (issue 15, and
       what a table without ``count`` means), or only the openings ``passed`` by, not turned
       into (:class:`lfdfuse.behaviors.landmarks.PassedCounter`). Corners met while turning
