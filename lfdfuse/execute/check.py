@@ -5,10 +5,13 @@ on the teacher's track: where the replay agrees with the teacher, no decision is
 the teacher's track the fusion already sees what the teacher turned toward; the robot, driving
 on from its own line, may not. :func:`check` drives the table from the demo's start in the
 demo's world (a rollout, as ``execute`` does) and follows the teacher's path in order; where the
-robot leaves it, the teacher's turn there is the missing decision, or the next decision's
-landmark misleads it. :func:`repair` tries such turns as decisions
-(:func:`lfdfuse.segment.decisions.find_decisions`'s ``forced``) and the next decision's other
-landmark cues (its ``cues``), and keeps one only if the rollouts then follow the teacher further.
+robot leaves it, the teacher's turn there is the missing decision, the next decision's
+landmark misleads it, the turn just made ended short, or the rows learned after a goal step's
+last turn steer it wrong. :func:`repair` tries (:class:`Amends`) such turns as decisions
+(:func:`lfdfuse.segment.decisions.find_decisions`'s ``forced``), the next decision's other
+landmark cues (its ``cues``), the teacher's whole turn (its ``whole``) and the goal step's own
+rows after its last turn (:func:`lfdfuse.estimate.subgoals.refine`'s ``rest``), and keeps one only
+if the rollouts then follow the teacher further.
 """
 
 from __future__ import annotations
