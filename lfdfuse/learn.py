@@ -25,6 +25,7 @@ from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run, estimate_ru
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.check import CHECK_STARTS, Amends, DemoWorld, Repair, demo_world, repair
 from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.log.reader import Run
 from lfdfuse.network.table import FusionTable
 from lfdfuse.progress import Progress, part
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
@@ -96,6 +97,12 @@ def learn_run(
     return LearnResult(table, groups, skipped, decisions, (name,), fixed)
 
 
+def home_of(raw: Run, run: SegmentedRun) -> DemoWorld | None:
+    """Where the demo ``raw`` (segmented as ``run``) was driven, to check its sub-goals in
+    (:func:`lfdfuse.execute.check.demo_world`: only a demo lfdfuse drove has one)."""
+    return demo_world(raw, goals=sum(seg.goal is not None for seg in run.segments))
+
+
 def subgoals_checked(
     table: FusionTable,
     run: SegmentedRun,
@@ -153,7 +160,7 @@ def learn(
         if options.subgoals:
             run, raw = read_segmented_and_run(src)
             track = track_of(raw, run, source=str(src))
-            home = demo_world(raw, goals=sum(seg.goal is not None for seg in run.segments))
+            home = home_of(raw, run)
         else:
             run = read_segmented(src)
         return learn_run(run, options=options, track=track, name=name, progress=progress, home=home)

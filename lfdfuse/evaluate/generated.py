@@ -22,7 +22,7 @@ from lfdfuse import learn
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.evaluate.offroute import OffRouteCase, run_starts
-from lfdfuse.execute.check import CHECK_STARTS, demo_world
+from lfdfuse.execute.check import CHECK_STARTS
 from lfdfuse.execute.starts import perturbed_starts, wilson_interval
 from lfdfuse.log.reader import read_run
 from lfdfuse.network.table import leaf_steps
@@ -84,7 +84,7 @@ def run_generated(
     plain = learn.learn_run(run, options=learn.LearnOptions(estimate), name=demo.segmented.name).table
     raw = read_run(demo.segmented)
     track = track_of(raw, run, source=str(demo.segmented))
-    home = demo_world(raw, goals=sum(seg.goal is not None for seg in run.segments))
+    home = learn.home_of(raw, run)
     tables = {"reactive": plain}
     landmarks: dict[str, tuple[str, ...]] = {}
     for name, params in variants.items():
