@@ -163,17 +163,21 @@ def check(table: FusionTable, world: World, start: Pose, teacher_xy: np.ndarray,
 
 def blame(track: LandmarkTrack, c: Check, params: DecisionParams) -> int | None:
     """A step of the teacher's turn where the robot left the path: the last turn begun before
-    the first point missed that ended near the last point met."""
+    the first point missed that ended near the last point met; failing one, the last such turn
+    that left the held heading by ``params.blamed_turn_rad`` only (a corner taken in two)."""
     if c.missed_at is None:
         return None
-    turns = [
-        (a, b)
-        for a, b, _ in teacher_turns(
-            track, 0, len(track.held_rad), began_rad=params.began_rad, min_turn_rad=params.min_turn_rad
-        )
-        if a <= c.missed_at and b >= c.last_met_at - BLAME_STEPS
-    ]
-    return max(turns)[0] if turns else None
+    for least in (params.min_turn_rad, params.blamed_turn_rad):
+        turns = [
+            (a, b)
+            for a, b, _ in teacher_turns(
+                track, 0, len(track.held_rad), began_rad=params.began_rad, min_turn_rad=least
+            )
+            if a <= c.missed_at and b >= c.last_met_at - BLAME_STEPS
+        ]
+        if turns:
+            return max(turns)[0]
+    return None
 
 
 @dataclass(frozen=True)

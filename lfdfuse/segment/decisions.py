@@ -110,6 +110,10 @@ class DecisionParams:
     #: broke up while the teacher turned, the fused heading swinging as the BAC changed)
     max_gap: int = 3
     min_turn_rad: float = math.radians(45.0)  # the teacher really turned that way
+    #: a turn a rollout left the teacher's path at (``forced``) may leave the held heading by
+    #: this little, if the heading still rose ``min_turn_rad``: the sectors were held again
+    #: while the teacher turned (a corner taken in two), and the held heading lags the turn
+    blamed_turn_rad: float = math.radians(20.0)
     #: ... within this many steps past the divergence (40 finds a teacher who began to diverge
     #: early, at a spur just past a corner, and turned into it well after)
     rise_steps: int = 25
@@ -236,17 +240,21 @@ def find_decisions(
         ]
         if p.junctions or forced:  # the teacher's own turns (not the network's: a correction
             # log) where no divergence made a decision
+            big = teacher_turns(track, lo, hi, began_rad=p.began_rad, min_turn_rad=p.min_turn_rad)
+            small = (
+                teacher_turns(track, lo, hi, began_rad=p.began_rad, min_turn_rad=p.blamed_turn_rad)
+                if forced
+                else big
+            )
             found = sorted(
                 found
                 + [
                     (a, b, sgn, True)
-                    for a, b, sgn in teacher_turns(
-                        track, lo, hi, began_rad=p.began_rad, min_turn_rad=p.min_turn_rad
-                    )
+                    for a, b, sgn in small
                     if b - a >= p.min_steps
                     and informative[a:b].mean() >= 0.5
                     and not any(d.segment == seg.index and a < d.turn_end and d.begin < b for d in plain)
-                    and (p.junctions or any(a <= f < b for f in forced))
+                    and (any(a <= f < b for f in forced) or (p.junctions and (a, b, sgn) in big))
                 ]
             )
         for a, b, sgn, own in found:
