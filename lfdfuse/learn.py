@@ -126,6 +126,7 @@ def subgoals_checked(
             cues=dict(amends.cues),
             whole=amends.whole,
             rest=amends.rest,
+            approach=amends.approach,
             progress=progress,
         )
         return res.table, res.decisions
@@ -136,6 +137,7 @@ def subgoals_checked(
         home=home,
         starts=home.starts(options.check_starts or 0, options.estimate.seed),
         segments=tuple((s.start, s.stop) for s in run.segments),
+        goal_segments=tuple(s.index for s in run.segments if s.goal is not None),
         params=options.decisions,
     )
 

@@ -22,6 +22,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from lfdfuse.errors import LogError
+from lfdfuse.estimate.approach import approach_run, spread
 from lfdfuse.estimate.methods import EstimateOptions
 from lfdfuse.estimate.replay import fused_vectors
 from lfdfuse.estimate.segments import estimate_segments, run_rng
@@ -30,6 +31,7 @@ from lfdfuse.network.landmarks import Ahead, Landmark, OpeningCount
 from lfdfuse.network.table import FusionTable, Network, Step
 from lfdfuse.progress import Progress, tell
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, find_decisions, split_segments
+from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.segment.read import SegmentedRun
 from lfdfuse.segment.track import LandmarkTrack, OpeningCue, landmark_track
 
@@ -59,13 +61,16 @@ def refine(
     cues: Mapping[int, OpeningCue] | None = None,
     whole: Collection[int] = (),
     rest: Collection[int] = (),
+    approach: Collection[int] = (),
 ) -> SubgoalResult:
     """``table`` (the paper's table of ``run``) with sub-goals at the run's decision points.
 
     Only the sub-segments of goal segments with a decision are estimated; every other step of
     ``table`` is kept as it is. ``forced``, ``cues``, ``whole``: see :func:`find_decisions`;
     ``rest``: goal segments whose step after the last turn keeps the goal step's rows of
-    ``table``. ``progress`` is told how far the sub-segments' pass is.
+    ``table``. ``approach``: goal segments without a decision whose rows with the goal in view
+    are learned from the teacher's approach to it (:mod:`lfdfuse.estimate.approach`).
+    ``progress`` is told how far the sub-segments' pass is.
     """
     decisions = find_decisions(
         segments=run.segments,
@@ -78,6 +83,10 @@ def refine(
         cues=cues,
         whole=whole,
     )
+    if approach:
+        table = _approached(
+            table, run, opts, [s for s in run.segments if s.index in approach and s.goal], decisions
+        )
     if not decisions:
         tell(progress, 1.0, 1.0)
         return SubgoalResult(table, ())
@@ -134,3 +143,29 @@ def refine(
         inner.append(old if seg.index in rest else replace(parts[-1], name=old.name))
         steps[seg.index] = Step(old.name, old.goal, (), Network(old.name, tuple(inner)))
     return SubgoalResult(replace(table, network=replace(table.network, steps=tuple(steps))), tuple(decisions))
+
+
+def _approached(
+    table: FusionTable,
+    run: SegmentedRun,
+    opts: EstimateOptions,
+    segments: Sequence[GoalSegment],
+    decisions: Sequence[DecisionPoint],
+) -> FusionTable:
+    """``table`` with the steps of ``segments`` (those without a decision) estimated again with
+    their rows with the goal in view learned from the teacher's approach alone."""
+    decided = {d.segment for d in decisions}
+    mine = [s for s in segments if s.index not in decided]
+    if not mine:
+        return table
+    moved, approaches = approach_run(run, mine)
+    if not approaches:
+        return table
+    redo = [s for s in mine if s.index in {a.segment for a in approaches}]
+    est = estimate_segments(
+        replace(moved, segments=tuple(redo)), opts=opts, rng=run_rng(run, opts), table_default=False
+    )
+    steps = list(table.network.steps)
+    for a, step in zip(approaches, est.steps, strict=True):
+        steps[a.segment] = spread(replace(step, name=steps[a.segment].name), a, run.names)
+    return replace(table, network=replace(table.network, steps=tuple(steps)))

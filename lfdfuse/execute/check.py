@@ -193,9 +193,12 @@ class Amends:
     #: these goal segments end with the goal step's own rows, learned over all of it, not the
     #: rows of what follows the last decision alone
     rest: tuple[int, ...] = ()
+    #: these goal segments (without a decision) learn their rows with the goal in view from the
+    #: teacher's approach to it (``refine``'s ``approach``)
+    approach: tuple[int, ...] = ()
 
     def __bool__(self) -> bool:
-        return bool(self.forced or self.cues or self.whole or self.rest)
+        return bool(self.forced or self.cues or self.whole or self.rest or self.approach)
 
     def with_cue(self, onset: int, cue: OpeningCue) -> Amends:
         return replace(self, cues=(*((k, c) for k, c in self.cues if k != onset), (onset, cue)))
@@ -249,6 +252,9 @@ class Repair:
             f"  goal step {k + 1} drives on after its last turn with its own rows, learned over all of it"
             for k in a.rest
         ]
+        lines += [
+            f"  goal step {k + 1} heads at its goal in view as the teacher approached it" for k in a.approach
+        ]
         return lines
 
 
@@ -285,6 +291,22 @@ def _rest_of(decisions: Sequence[DecisionPoint], segments: Sequence[tuple[int, i
     return []
 
 
+def _approach_of(
+    decisions: Sequence[DecisionPoint],
+    segments: Sequence[tuple[int, int]],
+    goal_segments: Sequence[int],
+    c: Check,
+) -> list[int]:
+    """The goal segment whose goal the robot drove past: the first goal it did not reach, when it
+    followed the teacher's path to where the teacher reached it (and the segment has no decision)."""
+    if c.goals >= len(goal_segments):
+        return []
+    k = goal_segments[c.goals]
+    if any(d.segment == k for d in decisions):
+        return []
+    return [k] if c.missed_at is None or c.missed_at >= segments[k][1] - BLAME_STEPS else []
+
+
 def score(checks: Sequence[Check]) -> tuple[int, int]:
     """Goals reached and points met, summed over the starts."""
     return sum(c.goals for c in checks), sum(c.met for c in checks)
@@ -303,6 +325,7 @@ def repair(
     home: DemoWorld,
     starts: Sequence[Pose],
     segments: Sequence[tuple[int, int]] = (),
+    goal_segments: Sequence[int] = (),
     params: DecisionParams = DecisionParams(),
     rounds: int = 3,
     candidates: int = 4,
@@ -331,6 +354,9 @@ def repair(
             for k in _rest_of(decisions, segments, c):
                 if k not in amends.rest:
                     cands.append(replace(amends, rest=(*amends.rest, k)))
+            for k in _approach_of(decisions, segments, goal_segments, c):
+                if k not in amends.approach:
+                    cands.append(replace(amends, approach=(*amends.approach, k)))
         unique: list[Amends] = []
         for cand in cands:
             if cand not in unique:

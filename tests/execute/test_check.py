@@ -3,6 +3,7 @@ the repair of a table that leaves it."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -12,6 +13,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from lfdfuse import learn
+from lfdfuse.behaviors.landmarks import OpeningParams
 from lfdfuse.evaluate.generated import THREE_GOALS
 from lfdfuse.execute.check import (
     BLAME_STEPS,
@@ -19,8 +21,10 @@ from lfdfuse.execute.check import (
     SPACING_M,
     Amends,
     Check,
+    _approach_of,
     _rest_of,
     _turned_at,
+    blame,
     demo_world,
     follow,
     path_points,
@@ -28,10 +32,13 @@ from lfdfuse.execute.check import (
     score,
 )
 from lfdfuse.log.reader import read_run
-from lfdfuse.segment.decisions import DecisionPoint
-from lfdfuse.segment.track import OpeningCue
+from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
+from lfdfuse.segment.track import LandmarkTrack, OpeningCue
+from lfdfuse.sim.sensors import ScanGeometry
 from lfdfuse.world.generate import generate_offroute
 from tests.conftest import ROOT
+
+GEOM = ScanGeometry(-math.pi / 2, math.pi / 2, 3, 8.0)
 
 
 def _path(seed: int, n: int = 400) -> np.ndarray:
@@ -164,3 +171,69 @@ def test_amends_say_what_they_change_and_a_cue_replaces_the_one_before() -> None
     assert not Amends() and Amends(rest=(1,)) and Amends(whole=(5,))
     a = Amends().with_cue(7, OpeningCue.ALL).with_cue(9, OpeningCue.PASSED).with_cue(7, OpeningCue.DISTANCE)
     assert dict(a.cues) == {7: OpeningCue.DISTANCE, 9: OpeningCue.PASSED}
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(st.integers(20, 200), min_size=1, max_size=4),
+    st.integers(0, 4),
+    st.one_of(st.none(), st.integers(0, 800)),
+    st.sets(st.integers(0, 3)),
+)
+def test_the_approach_is_blamed_for_a_goal_missed_where_the_teacher_reached_it(
+    lengths: list[int], goals: int, missed: int | None, decided: set[int]
+) -> None:
+    """``_approach_of``: the first goal not reached, when the robot followed the teacher's path to
+    where the teacher reached it (``BLAME_STEPS`` before its segment's end, or to the end); never
+    a goal step with a decision (its rows after the turn have their own repairs)."""
+    bounds = np.concatenate([[0], np.cumsum(lengths)]).tolist()
+    segments = list(zip(bounds[:-1], bounds[1:], strict=True))
+    goal_segments = list(range(len(segments)))
+    decisions = [
+        DecisionPoint(k, "left", lo, lo + 5, 1, lo, 1.0, 1.0, 0.5)
+        for k, (lo, _) in enumerate(segments)
+        if k in decided
+    ]
+    c = Check(goals=goals, met=1, points=9, missed_at=missed, last_met_at=0)
+    got = _approach_of(decisions, segments, goal_segments, c)
+    if goals >= len(segments) or goals in decided:
+        assert got == []
+    elif missed is None or missed >= segments[goals][1] - BLAME_STEPS:
+        assert got == [goals]
+    else:
+        assert got == []
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.integers(10, 60), st.floats(21.0, 44.0), st.floats(46.0, 90.0), st.integers(0, 400), st.integers(0, 80)
+)
+def test_blame_takes_a_corner_taken_in_two_only_when_no_whole_turn_is_near(
+    start: int, small_deg: float, big_deg: float, missed: int, back: int
+) -> None:
+    """``blame``: the last turn that left the held heading by ``min_turn_rad`` near where the
+    robot left the path; failing one, the last that left it by ``blamed_turn_rad``."""
+    p = DecisionParams()
+    n = 500
+    held = np.zeros(n)
+    small = (start, start + 30)
+    big = (start + 200, start + 230)
+    held[small[0] : small[1]] = math.radians(small_deg) * np.sin(np.linspace(0.1, math.pi - 0.1, 30))
+    held[big[0] : big[1]] = -math.radians(big_deg) * np.sin(np.linspace(0.1, math.pi - 0.1, 30))
+    track = LandmarkTrack(
+        np.zeros((n, 2), bool), np.full(n, 0.04), np.zeros(n), held, np.zeros((n, 3)), GEOM, OpeningParams()
+    )
+    c = Check(goals=0, met=1, points=9, missed_at=missed, last_met_at=max(missed - back, 0))
+
+    def near(a: int, b: int) -> bool:
+        on = np.nonzero(np.abs(held[a:b]) > p.began_rad)[0]
+        a2, b2 = a + int(on[0]), a + int(on[-1]) + 1
+        return a2 <= missed and b2 >= c.last_met_at - BLAME_STEPS
+
+    got = blame(track, c, p)
+    if near(*big):
+        assert got is not None and big[0] <= got < big[1]
+    elif near(*small):
+        assert got is not None and small[0] <= got < small[1]
+    else:
+        assert got is None

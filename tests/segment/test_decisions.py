@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from lfdfuse.behaviors.landmarks import OpeningParams
@@ -307,3 +307,34 @@ def test_a_forced_turn_the_goal_cuts_short_ends_before_the_goal() -> None:
     assert (
         find_decisions(segments=SEGS, demo=demo, informative=np.ones(N, bool), fused=demo, track=track) == []
     )  # not forced: the goal came first
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.sampled_from([0, 1]), st.integers(30, 60), st.floats(50.0, 80.0), st.integers(10, 24))
+def test_a_corner_taken_in_two_is_a_decision_only_when_forced(side: int, start: int, deg: float, steps: int) -> None:
+    """The sectors held again halfway through the teacher's turn (a corner taken in two): the
+    turn never leaves the held heading by ``min_turn_rad`` though the heading rose that far. A
+    rollout left the path there (``forced``): it is a decision; not forced, none; a turn that
+    left the held heading by less than ``blamed_turn_rad`` is none even forced."""
+    p = DecisionParams()
+    sgn = 1.0 if side == 0 else -1.0
+    turn = np.zeros(N)
+    turn[start : start + steps] = sgn * math.radians(deg) / steps
+    track = _track(turn, start - 2, side, ahead_m=np.full(N, 2.0))
+    half = start + steps // 2
+    heading = np.cumsum(turn)
+    held = np.where(np.arange(N) >= half, heading - heading[half - 1], track.held_rad)
+    two = replace(track, held_rad=held)
+    assert float(np.abs(held).max()) < p.min_turn_rad
+    demo = np.stack([np.cos(heading), np.sin(heading)], axis=1)
+    ok = np.ones(N, bool)
+
+    def find(t: LandmarkTrack, forced: list[int]) -> list[DecisionPoint]:
+        return find_decisions(segments=SEGS, demo=demo, informative=ok, fused=demo, track=t, forced=forced)
+
+    assume(float(np.abs(held[start:half]).max()) >= p.blamed_turn_rad)
+    (d,) = find(two, [half - 1])  # in the first half, past its first 8°
+    assert d.side == ("left" if side == 0 else "right") and d.onset == start - 2
+    assert find(two, []) == []
+    small = replace(two, held_rad=held * (0.9 * p.blamed_turn_rad / float(np.abs(held).max())))
+    assert find(small, [half - 1]) == []
