@@ -7,11 +7,14 @@ on from its own line, may not. :func:`check` drives the table from the demo's st
 demo's world (a rollout, as ``execute`` does) and follows the teacher's path in order; where the
 robot leaves it, the teacher's turn there is the missing decision, the next decision's
 landmark misleads it, the turn just made ended short, or the rows learned after a goal step's
-last turn steer it wrong. :func:`repair` tries (:class:`Amends`) such turns as decisions
-(:func:`lfdfuse.segment.decisions.find_decisions`'s ``forced``), the next decision's other
-landmark cues (its ``cues``), the teacher's whole turn (its ``whole``) and the goal step's own
-rows after its last turn (:func:`lfdfuse.estimate.subgoals.refine`'s ``rest``), and keeps one only
-if the rollouts then follow the teacher further.
+last turn steer it wrong; where it follows the path past a goal it did not reach, the goal
+step's rows with the goal in view pull too little toward it. :func:`repair` tries
+(:class:`Amends`) such turns as decisions (:func:`lfdfuse.segment.decisions.find_decisions`'s
+``forced``), the next decision's other landmark cues (its ``cues``), the teacher's whole turn
+(its ``whole``), the goal step's own rows after its last turn
+(:func:`lfdfuse.estimate.subgoals.refine`'s ``rest``) and rows learned from the teacher's
+approach to the goal (its ``approach``), and keeps one only if the rollouts then follow the
+teacher further.
 """
 
 from __future__ import annotations
