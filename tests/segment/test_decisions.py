@@ -311,7 +311,9 @@ def test_a_forced_turn_the_goal_cuts_short_ends_before_the_goal() -> None:
 
 @settings(max_examples=30, deadline=None)
 @given(st.sampled_from([0, 1]), st.integers(30, 60), st.floats(50.0, 80.0), st.integers(10, 24))
-def test_a_corner_taken_in_two_is_a_decision_only_when_forced(side: int, start: int, deg: float, steps: int) -> None:
+def test_a_corner_taken_in_two_is_a_decision_only_when_forced(
+    side: int, start: int, deg: float, steps: int
+) -> None:
     """The sectors held again halfway through the teacher's turn (a corner taken in two): the
     turn never leaves the held heading by ``min_turn_rad`` though the heading rose that far. A
     rollout left the path there (``forced``): it is a decision; not forced, none; a turn that
