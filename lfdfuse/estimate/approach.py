@@ -85,7 +85,8 @@ def approach_run(
 
 def spread(step: Step, approach: Approach, names: Sequence[str]) -> Step:
     """``step`` (estimated on :func:`approach_run`'s run) with the pooled row written for every BAC
-    with the goal in view the teacher met (each with the weights of its own behaviours)."""
+    with the goal in view the teacher met (each with the weights of its own behaviours, and the
+    approach's samples: the steps it was learned from)."""
     pooled = step.row(approach.pooled)
     if pooled is None:
         return step

@@ -337,7 +337,9 @@ def repair(
     teacher's path, try (:class:`Amends`) the teacher's turn there as a decision, the next
     decision's other landmark cues, the teacher's whole turn for the decision just made, and,
     after a goal segment's last decision (``segments``: the demo's goal segments), the goal
-    step's own rows; keep the best if the rollouts then follow further, and go on from it."""
+    step's own rows; where it followed the path past a goal it did not reach
+    (``goal_segments``: the segments ended by the task's goals, in order), that goal step's
+    approach rows. Keep the best if the rollouts then follow further, and go on from it."""
     world, teacher_xy, max_time_s = home.world, home.teacher_xy, home.max_time_s
     amends = Amends()
     table, decisions = refine(amends)
