@@ -97,11 +97,13 @@ def spread(step: Step, approach: Approach, names: Sequence[str]) -> Step:
             replace(
                 pooled,
                 bac=b,
-                weights={n: w for n, w in pooled.weights.items() if n in mine},
-                std=None if pooled.std is None else {n: s for n, s in pooled.std.items() if n in mine},
-                trial_std=None
-                if pooled.trial_std is None
-                else {n: s for n, s in pooled.trial_std.items() if n in mine},
+                weights=_only(pooled.weights, mine),
+                std=None if pooled.std is None else _only(pooled.std, mine),
+                trial_std=None if pooled.trial_std is None else _only(pooled.trial_std, mine),
             )
         )
     return replace(step, fusion=tuple(sorted(rows, key=lambda r: r.bac)))
+
+
+def _only(values: dict[str, float], names: set[str]) -> dict[str, float]:
+    return {n: v for n, v in values.items() if n in names}
