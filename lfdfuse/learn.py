@@ -127,6 +127,7 @@ def subgoals_checked(
             whole=amends.whole,
             rest=amends.rest,
             approach=amends.approach,
+            plain=amends.plain,
             progress=progress,
         )
         return res.table, res.decisions

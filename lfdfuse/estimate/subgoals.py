@@ -62,6 +62,7 @@ def refine(
     whole: Collection[int] = (),
     rest: Collection[int] = (),
     approach: Collection[int] = (),
+    plain: Collection[int] = (),
 ) -> SubgoalResult:
     """``table`` (the paper's table of ``run``) with sub-goals at the run's decision points.
 
@@ -70,6 +71,8 @@ def refine(
     ``rest``: goal segments whose step after the last turn keeps the goal step's rows of
     ``table``. ``approach``: goal segments without a decision whose rows with the goal in view
     are learned from the teacher's approach to it (:mod:`lfdfuse.estimate.approach`).
+    ``plain``: goal segments whose decisions are dropped: their step stays the paper's (their
+    sub-segments are still estimated with the others, so that every other step comes out the same).
     ``progress`` is told how far the sub-segments' pass is.
     """
     decisions = find_decisions(
@@ -83,11 +86,12 @@ def refine(
         cues=cues,
         whole=whole,
     )
+    kept = [d for d in decisions if d.segment not in plain]
     if approach:
         table = _approached(
-            table, run, opts, [s for s in run.segments if s.index in approach and s.goal], decisions
+            table, run, opts, [s for s in run.segments if s.index in approach and s.goal], kept
         )
-    if not decisions:
+    if not kept:
         tell(progress, 1.0, 1.0)
         return SubgoalResult(table, ())
     subs = split_segments(run.segments, decisions)
@@ -103,7 +107,7 @@ def refine(
     sub_steps = dict(zip((s.index for _, s in new), est.steps, strict=True))
     steps = list(table.network.steps)
     for seg in run.segments:
-        mine = [d for d in decisions if d.segment == seg.index]
+        mine = [d for d in kept if d.segment == seg.index]
         if not mine:
             continue
         parts = [sub_steps[s.index] for orig, s in new if orig == seg.index]
@@ -142,7 +146,7 @@ def refine(
         # after the last turn: the rows of what followed it, or (``rest``) the goal step's own
         inner.append(old if seg.index in rest else replace(parts[-1], name=old.name))
         steps[seg.index] = Step(old.name, old.goal, (), Network(old.name, tuple(inner)))
-    return SubgoalResult(replace(table, network=replace(table.network, steps=tuple(steps))), tuple(decisions))
+    return SubgoalResult(replace(table, network=replace(table.network, steps=tuple(steps))), tuple(kept))
 
 
 def _approached(

@@ -199,9 +199,11 @@ class Amends:
     #: these goal segments (without a decision) learn their rows with the goal in view from the
     #: teacher's approach to it (``refine``'s ``approach``)
     approach: tuple[int, ...] = ()
+    #: these goal segments drop their decisions: their step is the paper's, learned over all of it
+    plain: tuple[int, ...] = ()
 
     def __bool__(self) -> bool:
-        return bool(self.forced or self.cues or self.whole or self.rest or self.approach)
+        return bool(self.forced or self.cues or self.whole or self.rest or self.approach or self.plain)
 
     def with_cue(self, onset: int, cue: OpeningCue) -> Amends:
         return replace(self, cues=(*((k, c) for k, c in self.cues if k != onset), (onset, cue)))
@@ -258,6 +260,7 @@ class Repair:
         lines += [
             f"  goal step {k + 1} heads at its goal in view as the teacher approached it" for k in a.approach
         ]
+        lines += [f"  goal step {k + 1} has no sub-goals: the paper's step drove further" for k in a.plain]
         return lines
 
 
@@ -292,6 +295,16 @@ def _rest_of(decisions: Sequence[DecisionPoint], segments: Sequence[tuple[int, i
             mine = [d for d in decisions if d.segment == k]
             return [k] if mine and mine[-1].turn_end <= c.missed_at else []
     return []
+
+
+def _decided_at(
+    decisions: Sequence[DecisionPoint], segments: Sequence[tuple[int, int]], c: Check
+) -> list[int]:
+    """The goal segment with decisions the robot left the path in (index into ``segments``)."""
+    if c.missed_at is None:
+        return []
+    k = next((k for k, (start, stop) in enumerate(segments) if start <= c.missed_at < stop), None)
+    return [k] if k is not None and any(d.segment == k for d in decisions) else []
 
 
 def _approach_of(
@@ -339,7 +352,9 @@ def repair(
     after a goal segment's last decision (``segments``: the demo's goal segments), the goal
     step's own rows; where it followed the path past a goal it did not reach
     (``goal_segments``: the segments ended by the task's goals, in order), that goal step's
-    approach rows. Keep the best if the rollouts then follow further, and go on from it."""
+    approach rows. Keep the best if the rollouts then follow further, and go on from it. When
+    none of those (at most ``candidates``) does, try each goal segment with decisions the robot
+    left the path in without them (the paper's step: the sub-goals may be what misleads)."""
     world, teacher_xy, max_time_s = home.world, home.teacher_xy, home.max_time_s
     amends = Amends()
     table, decisions = refine(amends)
@@ -347,6 +362,7 @@ def repair(
     checks = [best]
     for _ in range(rounds):
         cands: list[Amends] = []
+        plains: list[Amends] = []
         for c in sorted(best, key=lambda c: c.score):
             step = blame(track, c, params)
             if step is not None and step not in amends.forced:
@@ -362,17 +378,22 @@ def repair(
             for k in _approach_of(decisions, segments, goal_segments, c):
                 if k not in amends.approach:
                     cands.append(replace(amends, approach=(*amends.approach, k)))
+            for k in _decided_at(decisions, segments, c):
+                plains.append(replace(amends, plain=(*amends.plain, k)))
         unique: list[Amends] = []
         for cand in cands:
             if cand not in unique:
                 unique.append(cand)
         found = None
-        for a in unique[:candidates]:
-            t, ds = refine(a)
-            got = check_all(t, world, starts, teacher_xy, max_time_s)
-            checks.append(got)
-            if score(got) > score(best):
-                best, found = got, (a, t, ds)
+        for tried in (unique[:candidates], list(dict.fromkeys(plains))):
+            for a in tried:
+                t, ds = refine(a)
+                got = check_all(t, world, starts, teacher_xy, max_time_s)
+                checks.append(got)
+                if score(got) > score(best):
+                    best, found = got, (a, t, ds)
+            if found is not None:
+                break
         if found is None:
             break
         amends, table, decisions = found

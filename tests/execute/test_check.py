@@ -14,6 +14,8 @@ from hypothesis import strategies as st
 
 from lfdfuse import learn
 from lfdfuse.behaviors.landmarks import OpeningParams
+from lfdfuse.estimate.pipeline import EstimateOptions
+from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.evaluate.generated import THREE_GOALS
 from lfdfuse.execute.check import (
     BLAME_STEPS,
@@ -22,17 +24,21 @@ from lfdfuse.execute.check import (
     Amends,
     Check,
     _approach_of,
+    _decided_at,
     _rest_of,
     _turned_at,
     blame,
     demo_world,
     follow,
     path_points,
+    repair,
     rollout,
     score,
 )
 from lfdfuse.log.reader import read_run
+from lfdfuse.network.table import FusionTable
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
+from lfdfuse.segment.read import read_segmented
 from lfdfuse.segment.track import LandmarkTrack, OpeningCue
 from lfdfuse.sim.sensors import ScanGeometry
 from lfdfuse.world.generate import generate_offroute
@@ -106,6 +112,40 @@ def test_a_table_that_leaves_the_teacher_in_the_demo_world_is_repaired(tmp_path:
     assert res.decisions == rep.decisions and len(rep.describe()) >= 3
 
 
+def test_a_goal_step_whose_sub_goals_mislead_is_learned_without_them(tmp_path: Path) -> None:
+    """Generated world 175 (a tuning world): blue's step has a decision, and the sub-goal table
+    leaves the teacher's path there from the teacher's own start (2 goals); the paper's step for
+    blue reaches it. With no other repair to try (``candidates=0``), the check tries that goal
+    step without its sub-goals, keeps it, and only that step changes."""
+    world = generate_offroute(175)
+    demo = learn.demonstrate(THREE_GOALS, world=world, folder=tmp_path, name="d", duration_s=900.0, seed=1)
+    run, raw = read_segmented(demo.segmented), read_run(demo.segmented)
+    home = demo_world(raw, goals=3)
+    assert home is not None
+    paper = learn.learn_run(run, options=learn.LearnOptions(EstimateOptions()), name="d").table
+    track = track_of(raw, run)
+
+    def refined(a: Amends) -> tuple[FusionTable, list[DecisionPoint]]:
+        res = refine(paper, run, track, opts=EstimateOptions(), plain=a.plain)
+        return res.table, list(res.decisions)
+
+    segments = tuple((s.start, s.stop) for s in run.segments)
+    rep = repair(refined, track=track, home=home, starts=(home.start,), segments=segments, candidates=0)
+    (before,), (after,) = rep.checks[0], rep.kept
+    learned, decisions = refined(Amends())
+    blue = next(s.index for s in run.segments if s.goal == "attract_blue")
+    assert before.goals == 2 and any(d.segment == blue for d in decisions)
+    assert rep.amends == Amends(plain=(blue,)) and after.goals == 3 and len(rep.checks) == 2
+    assert all(d.segment != blue for d in rep.decisions)
+    changed = [
+        i
+        for i, (a, b) in enumerate(zip(learned.network.steps, rep.table.network.steps, strict=True))
+        if a != b
+    ]
+    assert changed == [blue] and rep.table.network.steps[blue] == paper.network.steps[blue]
+    assert any("no sub-goals" in line for line in rep.describe())
+
+
 def test_only_a_demo_lfdfuse_drove_has_a_world_to_check_in(tmp_path: Path) -> None:
     raw = read_run(ROOT / "sample_logs" / "keep-left-building.mcap")
     home = demo_world(raw, goals=0)
@@ -167,8 +207,33 @@ def test_whole_turn_and_rest_blame_the_decision_made_and_the_segment_left(
     assert _turned_at(decisions, followed) == [] and _rest_of(decisions, segments, followed) == []
 
 
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(st.integers(20, 200), min_size=1, max_size=4),
+    st.one_of(st.none(), st.integers(0, 900)),
+    st.sets(st.integers(0, 3)),
+)
+def test_a_goal_step_left_where_it_has_decisions_may_drop_them(
+    lengths: list[int], missed: int | None, decided: set[int]
+) -> None:
+    """``_decided_at``: the goal segment the robot left the path in, exactly when it has a
+    decision (the repair then tries it without its sub-goals); nothing when the path was followed
+    or left outside every segment."""
+    bounds = np.concatenate([[0], np.cumsum(lengths)]).tolist()
+    segments = list(zip(bounds[:-1], bounds[1:], strict=True))
+    decisions = [
+        DecisionPoint(k, "left", lo + 3, lo + 8, 1, lo, 1.0, 1.0, 0.5)
+        for k, (lo, _) in enumerate(segments)
+        if k in decided
+    ]
+    c = Check(goals=0, met=1, points=9, missed_at=missed, last_met_at=0)
+    got = _decided_at(decisions, segments, c)
+    inside = [k for k, (lo, hi) in enumerate(segments) if missed is not None and lo <= missed < hi]
+    assert got == [k for k in inside if k in decided]
+
+
 def test_amends_say_what_they_change_and_a_cue_replaces_the_one_before() -> None:
-    assert not Amends() and Amends(rest=(1,)) and Amends(whole=(5,))
+    assert not Amends() and Amends(rest=(1,)) and Amends(whole=(5,)) and Amends(plain=(0,))
     a = Amends().with_cue(7, OpeningCue.ALL).with_cue(9, OpeningCue.PASSED).with_cue(7, OpeningCue.DISTANCE)
     assert dict(a.cues) == {7: OpeningCue.DISTANCE, 9: OpeningCue.PASSED}
 
