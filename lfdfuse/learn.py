@@ -23,7 +23,8 @@ from pathlib import Path
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run, estimate_runs
 from lfdfuse.estimate.subgoals import refine, track_of
-from lfdfuse.execute.check import CHECK_STARTS, Amends, DemoWorld, Repair, demo_world, repair
+from lfdfuse.execute.check import CHECK_STARTS, DemoWorld, demo_world
+from lfdfuse.execute.repair import Amends, Repair, repair
 from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.log.reader import Run
 from lfdfuse.network.table import FusionTable
@@ -113,7 +114,7 @@ def subgoals_checked(
     progress: Progress | None = None,
 ) -> Repair:
     """``table`` (the paper's table of ``run``) with sub-goals, checked in the demo's world and
-    repaired where the robot leaves the teacher's path (:func:`lfdfuse.execute.check.repair`)."""
+    repaired where the robot leaves the teacher's path (:func:`lfdfuse.execute.repair.repair`)."""
 
     def refined(amends: Amends) -> tuple[FusionTable, Sequence[DecisionPoint]]:
         res = refine(

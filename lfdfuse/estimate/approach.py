@@ -10,7 +10,7 @@ BAC it is in there may be one the teacher only met far from the goal).
 began to head at it non-informative, and pools the steps after (the approach) into one BAC, the
 union of theirs; :func:`spread` writes that pooled row for every BAC with the goal in view the
 teacher met in the segment. The step then heads at its goal whenever it is in view, in the
-manner the teacher approached it. A repair (:mod:`lfdfuse.execute.check`), not the default: it
+manner the teacher approached it. A repair (:mod:`lfdfuse.execute.repair`), not the default: it
 trades the style's line while the goal is far ahead for reaching it.
 """
 

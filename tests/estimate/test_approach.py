@@ -15,7 +15,8 @@ from lfdfuse.estimate.approach import HOMING_RAD, Approach, approach_run, homing
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.evaluate.generated import THREE_GOALS
-from lfdfuse.execute.check import Amends, demo_world, rollout
+from lfdfuse.execute.check import demo_world, rollout
+from lfdfuse.execute.repair import Amends
 from lfdfuse.log.reader import read_run
 from lfdfuse.network.table import FusionRow, Step
 from lfdfuse.segment.goals import GoalSegment
