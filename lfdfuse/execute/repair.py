@@ -233,12 +233,8 @@ def repair(
                     cands.append(replace(amends, approach=(*amends.approach, k)))
             for k in _decided_at(decisions, segments, c):
                 plains.append(replace(amends, plain=(*amends.plain, k)))
-        unique: list[Amends] = []
-        for cand in cands:
-            if cand not in unique:
-                unique.append(cand)
         found = None
-        for tried in (unique[:candidates], list(dict.fromkeys(plains))):
+        for tried in (list(dict.fromkeys(cands))[:candidates], list(dict.fromkeys(plains))):
             for a in tried:
                 t, ds = refine(a)
                 got = check_all(t, world, starts, teacher_xy, max_time_s)
