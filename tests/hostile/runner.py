@@ -84,10 +84,11 @@ def lay_out(case: Case, folder: Path, base: Base) -> None:
 def _limit(mem_mb: int | None) -> Callable[[], None]:
     def pre() -> None:
         os.setsid()
-        # as from a shell: a test run earlier in this worker may have left SIGINT ignored, and an
-        # ignored SIGINT is inherited (Python then never raises KeyboardInterrupt in the command)
+        # as from a shell: a test run earlier in this worker may have left SIGINT ignored (or
+        # blocked), and both are inherited (Python then never raises KeyboardInterrupt in the command)
         signal.signal(signal.SIGINT, signal.SIG_DFL)
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
         if mem_mb is not None:
             resource.setrlimit(resource.RLIMIT_AS, (mem_mb * 2**20, mem_mb * 2**20))
 
