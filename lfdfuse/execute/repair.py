@@ -149,25 +149,27 @@ def _turned_at(decisions: Sequence[DecisionPoint], c: Check) -> list[DecisionPoi
     return done[-1:]
 
 
-def _rest_of(decisions: Sequence[DecisionPoint], segments: Sequence[tuple[int, int]], c: Check) -> list[int]:
-    """The goal segment (index into ``segments``, ``(start, stop)`` steps) the robot left the
-    path in, when that was after the segment's last decision."""
+def _left_in(segments: Sequence[tuple[int, int]], c: Check) -> int | None:
+    """The goal segment (index into ``segments``, ``(start, stop)`` steps) the robot left the path in."""
     if c.missed_at is None:
+        return None
+    return next((k for k, (start, stop) in enumerate(segments) if start <= c.missed_at < stop), None)
+
+
+def _rest_of(decisions: Sequence[DecisionPoint], segments: Sequence[tuple[int, int]], c: Check) -> list[int]:
+    """The goal segment the robot left the path in, when that was after the segment's last decision."""
+    k = _left_in(segments, c)
+    if k is None or c.missed_at is None:
         return []
-    for k, (start, stop) in enumerate(segments):
-        if start <= c.missed_at < stop:
-            mine = [d for d in decisions if d.segment == k]
-            return [k] if mine and mine[-1].turn_end <= c.missed_at else []
-    return []
+    mine = [d for d in decisions if d.segment == k]
+    return [k] if mine and mine[-1].turn_end <= c.missed_at else []
 
 
 def _decided_at(
     decisions: Sequence[DecisionPoint], segments: Sequence[tuple[int, int]], c: Check
 ) -> list[int]:
-    """The goal segment with decisions the robot left the path in (index into ``segments``)."""
-    if c.missed_at is None:
-        return []
-    k = next((k for k, (start, stop) in enumerate(segments) if start <= c.missed_at < stop), None)
+    """The goal segment with decisions the robot left the path in."""
+    k = _left_in(segments, c)
     return [k] if k is not None and any(d.segment == k for d in decisions) else []
 
 
