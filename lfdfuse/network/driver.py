@@ -16,7 +16,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from lfdfuse.behaviors.landmarks import OpeningSensor
+from lfdfuse.behaviors.landmarks import OpeningSensor, ahead_range
 from lfdfuse.behaviors.primitives import ATTRACT, BehaviorParams, Observations, compute
 from lfdfuse.control.drive import heading_to_command
 from lfdfuse.control.safety import SafetyParams, free_heading
@@ -163,9 +163,11 @@ class NetworkDriver:
             turn = math.atan2(math.sin(p.theta - th), math.cos(p.theta - th))
         self._odom = (p.x, p.y, p.theta)
         left, right = self.openings.update(observation.reading.ranges_m, step_m, turn)
-        ahead_open = self.openings.ahead_m >= self.openings.params.ahead_open_m
+        params = self.openings.params
+        ahead_open = self.openings.ahead_m >= params.ahead_open_m
+        front_open = ahead_range(observation.reading.ranges_m, self.geometry, params) >= params.ahead_open_m
         beside = (self.openings.tracker.inside[0], self.openings.tracker.inside[1])
-        return Cues(left, right, step_m, turn, self.openings.held_turn_rad, ahead_open, beside)
+        return Cues(left, right, step_m, turn, self.openings.held_turn_rad, ahead_open, beside, front_open)
 
     def _ask(self, dec: Decision, t_ns: int) -> None:
         """Raise a :class:`HelpRequest` when a condition that needs help begins."""

@@ -32,7 +32,9 @@ its own sensors — never map coordinates:
     met once the robot has turned that far toward that side from its heading before the turn:
     the heading the opening sectors were held at when the step began (a robot that meets the
     opening driving straight and a teacher who began to turn early end the turn on the same
-    heading).
+    heading). While it runs, the runtime never steers to the other side; after it, the next
+    step keeps near the heading the turn ended on for a while
+    (:data:`~lfdfuse.network.runtime.SETTLE_M`), into the corridor the turn faces.
 
 :class:`Progress` is what a running step has sensed since it began; :meth:`Landmark.met`
 decides from it.
@@ -61,6 +63,7 @@ class Cues:
     ahead_open: bool = True  # the way ahead, along that held heading, is open
     #: the opening met last on (left, right) is still beside the robot (its onset's tracker state)
     beside: tuple[bool, bool] = (False, False)
+    front_open: bool = True  # the way ahead along the robot's own heading is open
 
 
 @dataclass
@@ -72,6 +75,12 @@ class Progress:
     turned_rad: float = 0.0
     onset: tuple[bool, bool] = (False, False)  # at this tick
     ahead_open: bool = True  # at this tick
+    front_open: bool = True  # at this tick
+    #: heading change since the step began (rad, + = left)
+    heading_rad: float = 0.0
+    #: the step began where a turn ended: it keeps to the heading the turn ended on for a while
+    #: (:data:`lfdfuse.network.runtime.SETTLE_M`)
+    after_turn: bool = False
     #: openings passed by (not turned into) on each side before this tick
     passed: PassedCounter = field(default_factory=PassedCounter)
     #: per side: the opening beside the robot met every condition of the step's landmark at
@@ -86,6 +95,8 @@ class Progress:
     def add(self, cues: Cues) -> None:
         self.onset = (cues.onset_left, cues.onset_right)
         self.ahead_open = cues.ahead_open
+        self.front_open = cues.front_open
+        self.heading_rad += cues.turn_rad
         self.openings[0] += cues.onset_left
         self.openings[1] += cues.onset_right
         self.travelled_m += cues.step_m

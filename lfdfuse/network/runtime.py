@@ -3,11 +3,12 @@
 Each tick: behaviour outputs → the active step (the first step whose goal is not yet achieved;
 a nested network is active until its last goal is achieved) → the BAC of this instant → that
 step's weights for the BAC, or the default weights when the BAC was never seen in training (the
-step's own ``default_weights`` when it has them, else the table's) → fused vector (in a step
-that drives on to a side opening, kept within :data:`DRIVE_ON_RAD` of the held heading while
-the way ahead is open). Goals are monitored for the active step only, so a task that visits the same
-target twice ("A then B then A") needs it reached twice, in order; a goal once achieved stays
-achieved.
+step's own ``default_weights`` when it has them, else the table's) → fused vector, kept to the
+way a sub-goal step goes: in a step that drives on to a side opening, within :data:`DRIVE_ON_RAD`
+of the held heading while the way ahead is open; in a turn, never to the other side; after a
+turn, within :data:`SETTLE_RAD` of the heading it ended on for :data:`SETTLE_M`. Goals are
+monitored for the active step only, so a task that visits the same target twice ("A then B then
+A") needs it reached twice, in order; a goal once achieved stays achieved.
 """
 
 from __future__ import annotations
@@ -28,6 +29,14 @@ Path = tuple[int, ...]
 #: drives past the openings before the n-th as the teacher did, instead of being drawn into one
 #: by the style's pull toward open space (issue 21: measured on the generated worlds)
 DRIVE_ON_RAD = math.radians(30.0)
+
+#: the step after a turn keeps the fused heading within this of the heading the turn ended on for
+#: :data:`SETTLE_M` of travel, where the way ahead was open as the turn ended: a robot that turned
+#: tighter than the teacher ends its turn at the mouth of the new corridor, not in it, and the
+#: next step's rows (learned where the teacher drove along that corridor) can pull it back toward
+#: the open way behind (issue 21: the turn out of a spur at a T, measured on the generated worlds)
+SETTLE_RAD = math.radians(15.0)
+SETTLE_M = 2.0
 
 
 @dataclass(frozen=True)
@@ -105,6 +114,9 @@ class NetworkRuntime:
             self.achieved.add(done)
             # a sub-goal's landmark counts from its step's start; a turn, from the heading held then
             self.progress = Progress.fresh(cues.held_turn_rad)
+            landmark = self._step_at(done).landmark
+            # settles only where the way ahead is open as the turn ends (not a turn into a dead end)
+            self.progress.after_turn = landmark is not None and landmark.kind == "turned" and cues.front_open
             goal = self._step_at(done).goal
             if goal is not None:
                 achieved_now.append(goal)
@@ -119,10 +131,26 @@ class NetworkRuntime:
         fused = self.fuse(outputs, weights)
         if row is not None and float(np.hypot(*fused)) <= 1e-9:
             fused = self.fuse(outputs, fallback)
-        if step.landmark is not None and step.landmark.drives_on and cues.ahead_open:
-            # drive on past the openings before the one to turn into: along the held heading
-            fused = keep_within(fused, -cues.held_turn_rad, DRIVE_ON_RAD)
+        fused = self._steer(fused, step, cues)
         return Decision(step, path, bac, dict(weights), row is None, fused, tuple(achieved_now))
+
+    def _steer(self, fused: np.ndarray, step: Step, cues: Cues) -> np.ndarray:
+        """The fused vector, kept to the way a sub-goal step goes (its length kept)."""
+        landmark = step.landmark
+        if landmark is not None and landmark.drives_on and cues.ahead_open:
+            # drive on past the openings before the one to turn into: along the held heading
+            return keep_within(fused, -cues.held_turn_rad, DRIVE_ON_RAD)
+        if landmark is not None and landmark.kind == "turned":
+            # a turn to a side is met only by turning that way: where the turn's rows pull the
+            # other way (the robot is not where the teacher turned), drive straight on instead
+            sign = 1.0 if landmark.side == "left" else -1.0
+            if sign * math.atan2(fused[1], fused[0]) < 0.0:
+                return np.array([float(np.hypot(fused[0], fused[1])), 0.0])
+            return fused
+        if self.progress.after_turn and self.progress.travelled_m < SETTLE_M:
+            # drive on into the corridor the turn faces: along the heading the turn ended on
+            return keep_within(fused, -self.progress.heading_rad, SETTLE_RAD)
+        return fused
 
     def _step_at(self, path: Path) -> Step:
         net, step = self.table.network, None

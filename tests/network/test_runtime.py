@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from lfdfuse.behaviors.primitives import BehaviorOutputs
 from lfdfuse.network.landmarks import Cues
-from lfdfuse.network.runtime import DRIVE_ON_RAD, NetworkRuntime, step_name_of
+from lfdfuse.network.runtime import DRIVE_ON_RAD, SETTLE_M, SETTLE_RAD, NetworkRuntime, step_name_of
 from lfdfuse.network.table import FusionTable, parse_table
 
 NAMES = ("avoid", "attract_red", "wander", "attract_blue")
@@ -149,3 +149,81 @@ def test_a_step_driving_on_to_a_side_opening_keeps_near_the_held_heading(
         assert math.isclose(off, max(-DRIVE_ON_RAD, min(DRIVE_ON_RAD, raw)), abs_tol=1e-9)
     else:
         assert np.allclose(dec.fused, vec[2])
+
+
+def _turn(side: str, angle_rad: float) -> FusionTable:
+    """One goal step whose sub-steps turn ``angle_rad`` to ``side`` with ``wander`` alone, then
+    reach red with ``wander`` alone."""
+    sub = [
+        {
+            "name": f"turn-{side}",
+            "landmark": {"turned": side, "angle_rad": angle_rad},
+            "fusion": [{"bac": 0b0100, "weights": {"wander": 1.0}}],
+        },
+        {
+            "name": "reach-red",
+            "goal": {"target": "red"},
+            "fusion": [{"bac": 0b0100, "weights": {"wander": 1.0}}],
+        },
+    ]
+    step = {"name": "reach-red", "goal": {"target": "red"}, "network": {"name": "reach-red", "steps": sub}}
+    return table(network={"name": "t", "steps": [step]})
+
+
+def _pull(a: float) -> BehaviorOutputs:
+    """Only ``wander`` applies, pulling at bearing ``a`` with length 2."""
+    vec = np.zeros((4, 2))
+    vec[2] = [2.0 * math.cos(a), 2.0 * math.sin(a)]
+    return outputs(vec, [False, False, True, False])
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(-3.1, 3.1), st.sampled_from(["left", "right"]))
+def test_a_turn_step_never_steers_to_the_other_side(pull: float, side: str) -> None:
+    """A turn to a side is met only by turning that way: a pull to the other side (the turn's
+    rows where the robot is not where the teacher turned) drives straight on, its length kept."""
+    t = _turn(side, 1.0)
+    dec = NetworkRuntime(t).decide(_pull(pull), set(), Cues())
+    assert step_name_of(dec.path, t) == f"reach-red/turn-{side}"
+    sign = 1.0 if side == "left" else -1.0
+    if sign * pull >= 0.0:
+        assert np.allclose(dec.fused, [2.0 * math.cos(pull), 2.0 * math.sin(pull)])
+    else:
+        assert np.allclose(dec.fused, [2.0, 0.0])
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.floats(0.3, 2.5),
+    st.sampled_from(["left", "right"]),
+    st.lists(st.floats(-3.1, 3.1), min_size=1, max_size=30),
+    st.floats(0.05, 0.4),
+    st.booleans(),
+)
+def test_the_step_after_a_turn_keeps_to_the_heading_the_turn_ended_on(
+    angle: float, side: str, pulls: list[float], step_m: float, front_open: bool
+) -> None:
+    """Once the turn is met, the next step keeps the fused heading within SETTLE_RAD of the
+    heading the turn ended on for SETTLE_M of travel, its length kept — only where the way ahead
+    was open as the turn ended; after that, and otherwise, the row's fusion is untouched."""
+    t = _turn(side, angle)
+    rt = NetworkRuntime(t)
+    sign = 1.0 if side == "left" else -1.0
+    rt.decide(_pull(sign * 0.5), set(), Cues())
+    dec = rt.decide(_pull(0.0), set(), Cues(turn_rad=sign * (angle + 0.01), front_open=front_open))
+    assert step_name_of(dec.path, t) == "reach-red/reach-red"  # the turn is met: the goal's step runs
+    heading = travelled = 0.0  # since the turn ended
+    for pull in pulls:
+        turn = 0.3 * math.sin(7.0 * pull)  # the robot turns some way each tick
+        heading += turn
+        travelled += step_m
+        dec = rt.decide(_pull(pull), set(), Cues(step_m=step_m, turn_rad=turn))
+        assert math.isclose(float(np.hypot(*dec.fused)), 2.0)
+        raw = np.array([2.0 * math.cos(pull), 2.0 * math.sin(pull)])
+        if front_open and travelled < SETTLE_M:
+            off = math.atan2(dec.fused[1], dec.fused[0]) + heading  # from the turn's end heading
+            off = math.atan2(math.sin(off), math.cos(off))
+            want = math.atan2(math.sin(pull + heading), math.cos(pull + heading))
+            assert math.isclose(off, max(-SETTLE_RAD, min(SETTLE_RAD, want)), abs_tol=1e-9)
+        else:
+            assert np.allclose(dec.fused, raw)
