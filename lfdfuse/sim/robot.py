@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lfdfuse.control.drive import DriveParams
+from lfdfuse.errors import ConfigError
 from lfdfuse.world.raycast import RayCaster
 
 
@@ -22,8 +23,6 @@ class Pose:
     @staticmethod
     def parse(text: str) -> Pose:
         """Parse ``"X,Y,THETA"``."""
-        from lfdfuse.errors import ConfigError
-
         parts = text.split(",")
         try:
             x, y, th = (float(p) for p in parts)
