@@ -18,13 +18,24 @@ import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from lfdfuse import learn
 from lfdfuse.behaviors.landmarks import OpeningParams, OpeningSensor, opening_onsets, side_openings
 from lfdfuse.errors import ConfigError
+from lfdfuse.estimate.pipeline import EstimateOptions
+from lfdfuse.estimate.subgoals import refine, track_of
+from lfdfuse.evaluate.generated import THREE_GOALS, TIME_FACTOR
 from lfdfuse.evaluate.offroute import CASES, demonstrate, learn_case, perturbed_starts, run_starts
+from lfdfuse.log.reader import read_run
+from lfdfuse.network.driver import NetworkDriver
 from lfdfuse.network.landmarks import Ahead, Cues, Landmark, Progress
-from lfdfuse.network.runtime import NetworkRuntime
+from lfdfuse.network.runtime import DRIVE_ON_RAD, NetworkRuntime, keep_within
 from lfdfuse.network.table import dump_table, parse_table
-from lfdfuse.sim.sensors import LaserParams
+from lfdfuse.segment.read import read_segmented
+from lfdfuse.sim.loop import run as sim_run
+from lfdfuse.sim.robot import Pose
+from lfdfuse.sim.sensors import LaserParams, SensorParams
+from lfdfuse.sim.simulator import Observation, Simulator
+from lfdfuse.world.generate import generate_offroute
 from lfdfuse.world.model import load_world
 from tests.conftest import ROOT
 
@@ -393,3 +404,53 @@ def test_rest_keeps_the_goal_steps_own_rows_after_its_last_turn(office: tuple[Pa
         assert sa.network is not None and sb.network is not None
         assert sb.network.steps[:-1] == sa.network.steps[:-1]
         assert sb.network.steps[-1] == sp != sa.network.steps[-1]
+
+
+def test_the_turn_out_of_a_spur_keeps_to_its_side_and_then_to_the_corridor(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Generated world 1477 (held apart; the table checked failed from all three starts): green sits at the end of a spur; out
+    of it the teacher turns left toward blue at a T. The sub-goal table (no check) from the
+    teacher's start completes the task, the turn step having refused its rows' pull to the right
+    and the step after it having kept to the heading the turn ended on; with the runtime's
+    steering before these two rules (drive-on only) the same table turns right and misses blue."""
+    world = generate_offroute(1477)
+    demo = learn.demonstrate(THREE_GOALS, world=world, folder=tmp_path, name="d", duration_s=900.0, seed=1)
+    run, raw = read_segmented(demo.segmented), read_run(demo.segmented)
+    paper = learn.learn_run(run, options=learn.LearnOptions(EstimateOptions()), name="d").table
+    table = refine(paper, run, track_of(raw, run), opts=EstimateOptions()).table
+    max_t = float(math.ceil(TIME_FACTOR * demo.duration_s / 10.0) * 10.0)
+
+    class Watched(NetworkDriver):
+        """Notes the kinds of step whose fused vector the runtime kept to its way."""
+
+        steered: set[str] = set()
+
+        def command(self, observation: Observation) -> tuple[float, float]:
+            out = super().command(observation)
+            dec = self.last
+            if dec is not None and dec.step is not None and dec.weights:
+                if not np.allclose(self.runtime.fuse(self.last_outputs, dec.weights), dec.fused):
+                    lm, after = dec.step.landmark, self.runtime.progress.after_turn
+                    self.steered = self.steered | {lm.kind if lm else "after-turn" if after else "other"}
+            return out
+
+    def drive() -> tuple[list[str], set[str]]:
+        rng = np.random.default_rng(0)
+        drv = Watched(table=table, world=world, sensors=SensorParams(), rng=rng)
+        sim = Simulator(world, rng, SensorParams(), drv.robot)
+        res = sim_run(sim, drv, start=Pose(*world.start), duration_s=max_t)
+        return [g for g, _ in res.reached], drv.steered
+
+    goals, steered = drive()
+    assert goals == ["red", "green", "blue"] and {"turned", "after-turn"} <= steered
+
+    def drive_on_only(self: NetworkRuntime, fused: np.ndarray, step: Any, cues: Cues) -> np.ndarray:
+        lm = step.landmark
+        if lm is not None and lm.drives_on and cues.ahead_open:
+            return keep_within(fused, -cues.held_turn_rad, DRIVE_ON_RAD)
+        return fused
+
+    monkeypatch.setattr(NetworkRuntime, "_steer", drive_on_only)
+    goals, _ = drive()
+    assert goals == ["red", "green"]
