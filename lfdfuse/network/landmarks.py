@@ -75,7 +75,6 @@ class Progress:
     turned_rad: float = 0.0
     onset: tuple[bool, bool] = (False, False)  # at this tick
     ahead_open: bool = True  # at this tick
-    front_open: bool = True  # at this tick
     #: heading change since the step began (rad, + = left)
     heading_rad: float = 0.0
     #: the step began where a turn ended: it keeps to the heading the turn ended on for a while
@@ -95,7 +94,6 @@ class Progress:
     def add(self, cues: Cues) -> None:
         self.onset = (cues.onset_left, cues.onset_right)
         self.ahead_open = cues.ahead_open
-        self.front_open = cues.front_open
         self.heading_rad += cues.turn_rad
         self.openings[0] += cues.onset_left
         self.openings[1] += cues.onset_right

@@ -114,12 +114,12 @@ class NetworkRuntime:
             self.achieved.add(done)
             # a sub-goal's landmark counts from its step's start; a turn, from the heading held then
             self.progress = Progress.fresh(cues.held_turn_rad)
-            landmark = self._step_at(done).landmark
+            ended = self._step_at(done)
             # settles only where the way ahead is open as the turn ends (not a turn into a dead end)
-            self.progress.after_turn = landmark is not None and landmark.kind == "turned" and cues.front_open
-            goal = self._step_at(done).goal
-            if goal is not None:
-                achieved_now.append(goal)
+            turned = ended.landmark is not None and ended.landmark.kind == "turned"
+            self.progress.after_turn = turned and cues.front_open
+            if ended.goal is not None:
+                achieved_now.append(ended.goal)
             found = self.active()
         bac = int(outputs.bac[0])
         if found is None or self.complete:
