@@ -36,11 +36,18 @@ from lfdfuse.segment.read import SegmentedRun
 from lfdfuse.segment.track import LandmarkTrack, OpeningCue, landmark_track
 
 
-def track_of(raw: Run, run: SegmentedRun, *, source: str = "the log") -> LandmarkTrack:
-    """Landmark cues of a segmented run's steps, from the same log's ``/scan`` and ``/pose`` (odometry)."""
+def track_of(
+    raw: Run,
+    run: SegmentedRun,
+    *,
+    source: str = "the log",
+    short_lag_m: float | None = DecisionParams.short_lag_m,
+) -> LandmarkTrack:
+    """Landmark cues of a segmented run's steps, from the same log's ``/scan`` and ``/pose``
+    (odometry); with ``short_lag_m``, also as sectors held that far back see them."""
     if raw.pose is None or len(raw.t_ns) != len(run.t_ns):
         raise LogError(f"{source}: no odometry (/pose) on the scan clock: sub-goals need it")
-    return landmark_track(raw.ranges_m, raw.geometry, raw.pose)
+    return landmark_track(raw.ranges_m, raw.geometry, raw.pose, short_lag_m=short_lag_m)
 
 
 @dataclass(frozen=True)
@@ -131,6 +138,7 @@ def refine(
                             ahead=None
                             if d.ahead_open is None
                             else (Ahead.OPEN if d.ahead_open else Ahead.CLOSED),
+                            lag_m=d.lag_m,
                         ),
                     )
                 )
@@ -139,7 +147,7 @@ def refine(
                     turn,
                     name=f"turn-{d.side}{tag}",
                     goal=None,
-                    landmark=Landmark("turned", d.side, angle_rad=d.angle_rad),
+                    landmark=Landmark("turned", d.side, angle_rad=d.angle_rad, lag_m=d.lag_m),
                 )
             )
         old = steps[seg.index]

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections import defaultdict
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -23,7 +23,7 @@ from lfdfuse.control.safety import SafetyParams, free_heading
 from lfdfuse.errors import ConfigError
 from lfdfuse.network.landmarks import Cues
 from lfdfuse.network.runtime import Decision, NetworkRuntime, step_name_of
-from lfdfuse.network.table import FusionTable, Network
+from lfdfuse.network.table import FusionTable, Network, leaf_steps
 from lfdfuse.sim.loop import side_beam_index
 from lfdfuse.sim.robot import RobotParams
 from lfdfuse.sim.sensors import ScanGeometry, SensorParams, target_reached
@@ -94,6 +94,13 @@ def check_table_world(table: FusionTable, world: World) -> None:
         )
 
 
+def landmark_lags(table: FusionTable) -> list[float]:
+    """The lags other than the sensor's default that the table's landmarks are sensed with."""
+    return sorted(
+        {s.landmark.lag_m for s in leaf_steps(table) if s.landmark is not None and s.landmark.lag_m}
+    )
+
+
 #: a heading this far to a side turns the robot (nearly) on the spot: the speed falls with cos θ
 _ON_THE_SPOT_RAD = math.radians(85.0)
 
@@ -139,6 +146,11 @@ class NetworkDriver:
         self._il = side_beam_index(self.geometry.angles, math.pi / 2)
         self._ir = side_beam_index(self.geometry.angles, -math.pi / 2)
         self.openings = OpeningSensor(self.geometry)  # landmark cues for sub-goal steps (issue 15)
+        #: and for the landmarks sensed with their sectors held another way back
+        self.lagged = [
+            OpeningSensor(self.geometry, replace(self.openings.params, lag_m=lag))
+            for lag in landmark_lags(table)
+        ]
         self._odom: tuple[float, float, float] | None = None
         #: every request for help, in order (one when a condition begins, not every tick it lasts)
         self.help: list[HelpRequest] = []
@@ -162,12 +174,18 @@ class NetworkDriver:
             step_m = math.hypot(p.x - x, p.y - y)
             turn = math.atan2(math.sin(p.theta - th), math.cos(p.theta - th))
         self._odom = (p.x, p.y, p.theta)
-        left, right = self.openings.update(observation.reading.ranges_m, step_m, turn)
+        ranges = observation.reading.ranges_m
         params = self.openings.params
-        ahead_open = self.openings.ahead_m >= params.ahead_open_m
-        front_open = ahead_range(observation.reading.ranges_m, self.geometry, params) >= params.ahead_open_m
-        beside = (self.openings.tracker.inside[0], self.openings.tracker.inside[1])
-        return Cues(left, right, step_m, turn, self.openings.held_turn_rad, ahead_open, beside, front_open)
+        front_open = ahead_range(ranges, self.geometry, params) >= params.ahead_open_m
+
+        def sensed(sensor: OpeningSensor) -> Cues:
+            left, right = sensor.update(ranges, step_m, turn)
+            ahead_open = sensor.ahead_m >= params.ahead_open_m
+            beside = (sensor.tracker.inside[0], sensor.tracker.inside[1])
+            return Cues(left, right, step_m, turn, sensor.held_turn_rad, ahead_open, beside, front_open)
+
+        lagged = tuple((s.params.lag_m, sensed(s)) for s in self.lagged)
+        return replace(sensed(self.openings), lagged=lagged)
 
     def _ask(self, dec: Decision, t_ns: int) -> None:
         """Raise a :class:`HelpRequest` when a condition that needs help begins."""

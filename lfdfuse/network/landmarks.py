@@ -64,6 +64,19 @@ class Cues:
     #: the opening met last on (left, right) is still beside the robot (its onset's tracker state)
     beside: tuple[bool, bool] = (False, False)
     front_open: bool = True  # the way ahead along the robot's own heading is open
+    #: this tick as sensors holding their sectors another way back see it: ``(lag_m, cues)``
+    #: for every lag a landmark of the table names (:attr:`Landmark.lag_m`)
+    lagged: tuple[tuple[float, Cues], ...] = ()
+
+    def seen_with(self, lag_m: float | None) -> Cues:
+        """This tick as the sensor of a landmark sensed with ``lag_m`` sees it (None: the
+        default sensor; so does a lag no sensor was built for, where nothing was sensed)."""
+        if lag_m is None or not self.lagged:
+            return self
+        for lag, cues in self.lagged:
+            if lag == lag_m:
+                return cues
+        raise ValueError(f"no opening sensor holds its sectors {lag_m} m back")
 
 
 @dataclass
@@ -85,13 +98,18 @@ class Progress:
     #: per side: the opening beside the robot met every condition of the step's landmark at
     #: its onset but the way ahead being open (:meth:`Landmark.waits`)
     waiting: list[bool] = field(default_factory=lambda: [False, False])
+    #: the openings are sensed with the sectors held this far back (None: the default sensor)
+    lag_m: float | None = None
 
     @staticmethod
-    def fresh(turned_rad: float = 0.0) -> Progress:
-        """Nothing passed yet; ``turned_rad`` already turned (from the held heading)."""
-        return Progress([0, 0], turned_rad=turned_rad)
+    def fresh(turned_rad: float = 0.0, lag_m: float | None = None) -> Progress:
+        """Nothing passed yet; ``turned_rad`` already turned (from the held heading of the
+        sensor with ``lag_m``)."""
+        return Progress([0, 0], turned_rad=turned_rad, lag_m=lag_m)
 
     def add(self, cues: Cues) -> None:
+        """This tick's cues, as the step's sensor sees them (:meth:`Cues.seen_with`)."""
+        cues = cues.seen_with(self.lag_m)
         self.onset = (cues.onset_left, cues.onset_right)
         self.ahead_open = cues.ahead_open
         self.heading_rad += cues.turn_rad
@@ -135,6 +153,10 @@ class Landmark:
     ahead: Ahead | None = None
     #: met at the first opening on the side once ``odometry_m − within_m`` has been driven (nth unused)
     within_m: float | None = None
+    #: sensed with the opening sectors held this far back (m of travel; None: the sensor's
+    #: default, :attr:`~lfdfuse.behaviors.landmarks.OpeningParams.lag_m`): a decision found where
+    #: the default sectors were still swinging through the turn of a corner just before
+    lag_m: float | None = None
     #: an opening matches only after this share of ``odometry_m`` has been driven
     ODOMETRY_SHARE: ClassVar[float] = 0.5
 
@@ -193,11 +215,15 @@ class Landmark:
             if self.within_m is not None and self.odometry_m is not None:
                 return (
                     f"the first {what} on the {self.side} after {self.odometry_m:.1f} ± {self.within_m:.1f} m"
+                    f"{self._lag()}"
                 )
             nth = {1: "1st", 2: "2nd", 3: "3rd"}.get(self.nth, f"{self.nth}th")
             passed = " (counting those passed by)" if self.count == OpeningCount.PASSED else ""
-            return f"the {nth} {what} on the {self.side}{passed}{odo}"
-        return f"turned {math.degrees(self.angle_rad):.0f}° to the {self.side}"
+            return f"the {nth} {what} on the {self.side}{passed}{odo}{self._lag()}"
+        return f"turned {math.degrees(self.angle_rad):.0f}° to the {self.side}{self._lag()}"
+
+    def _lag(self) -> str:
+        return "" if self.lag_m is None else f", sensed {self.lag_m:g} m back"
 
     def to_dict(self) -> dict[str, Any]:
         if self.kind == "opening":
@@ -210,8 +236,11 @@ class Landmark:
                 d["ahead"] = str(self.ahead)
             if self.within_m is not None:
                 d["within_m"] = round(self.within_m, 2)
-            return d
-        return {"turned": self.side, "angle_rad": round(self.angle_rad, 3)}
+        else:
+            d = {"turned": self.side, "angle_rad": round(self.angle_rad, 3)}
+        if self.lag_m is not None:
+            d["lag_m"] = round(self.lag_m, 3)
+        return d
 
     @staticmethod
     def from_dict(d: Any, where: str) -> Landmark:
@@ -222,9 +251,9 @@ class Landmark:
             raise ConfigError(f"fusion table: {where}: give exactly one of 'opening' or 'turned'")
         kind = kinds[0]
         allowed = (
-            {"opening", "nth", "odometry_m", "count", "within_m", "ahead"}
+            {"opening", "nth", "odometry_m", "count", "within_m", "ahead", "lag_m"}
             if kind == "opening"
-            else {"turned", "angle_rad"}
+            else {"turned", "angle_rad", "lag_m"}
         )
         bad = sorted(set(d) - allowed)
         if bad:
@@ -234,6 +263,12 @@ class Landmark:
         side = d[kind]
         if side not in SIDES:
             raise ConfigError(f"fusion table: {where}.{kind} must be 'left' or 'right'")
+        lag = d.get("lag_m")
+        if lag is not None and (
+            isinstance(lag, bool) or not isinstance(lag, (int, float)) or not 0 < lag <= 10
+        ):
+            raise ConfigError(f"fusion table: {where}.lag_m must be a distance in (0, 10] metres")
+        lag_m = None if lag is None else float(lag)
         if kind == "opening":
             nth = d.get("nth", 1)
             if isinstance(nth, bool) or not isinstance(nth, int) or not 1 <= nth <= 1000:
@@ -264,8 +299,9 @@ class Landmark:
                 count=OpeningCount(count),
                 ahead=None if ahead is None else Ahead(ahead),
                 within_m=None if within is None else float(within),
+                lag_m=lag_m,
             )
         ang = d.get("angle_rad")
         if isinstance(ang, bool) or not isinstance(ang, (int, float)) or not 0 < ang <= 2 * math.pi:
             raise ConfigError(f"fusion table: {where}.angle_rad must be in (0, 2π]")
-        return Landmark("turned", side, angle_rad=float(ang))
+        return Landmark("turned", side, angle_rad=float(ang), lag_m=lag_m)

@@ -60,7 +60,7 @@ class NetworkRuntime:
         self.achieved: set[Path] = set()
         self._has_goal = bool(table.goals())
         #: what the active step has sensed since it began (its landmark decides from this)
-        self.progress = Progress.fresh()
+        self.progress = Progress.fresh(0.0, _lag_of(self.active()))
 
     def active(self) -> tuple[Path, Step] | None:
         """The active fusion step, depth first; None when every goal is achieved."""
@@ -112,15 +112,17 @@ class NetworkRuntime:
             if done is None:
                 break
             self.achieved.add(done)
-            # a sub-goal's landmark counts from its step's start; a turn, from the heading held then
-            self.progress = Progress.fresh(cues.held_turn_rad)
             ended = self._step_at(done)
+            found = self.active()
+            # a sub-goal's landmark counts from its step's start; a turn, from the heading held
+            # then (by the sensor the step's landmark is sensed with)
+            lag = _lag_of(found)
+            self.progress = Progress.fresh(cues.seen_with(lag).held_turn_rad, lag)
             # settles only where the way ahead is open as the turn ends (not a turn into a dead end)
             turned = ended.landmark is not None and ended.landmark.kind == "turned"
             self.progress.after_turn = turned and cues.front_open
             if ended.goal is not None:
                 achieved_now.append(ended.goal)
-            found = self.active()
         bac = int(outputs.bac[0])
         if found is None or self.complete:
             return Decision(None, (), bac, {}, False, np.zeros(2), tuple(achieved_now))
@@ -137,9 +139,10 @@ class NetworkRuntime:
     def _steer(self, fused: np.ndarray, step: Step, cues: Cues) -> np.ndarray:
         """The fused vector, kept to the way a sub-goal step goes (its length kept)."""
         landmark = step.landmark
-        if landmark is not None and landmark.drives_on and cues.ahead_open:
+        seen = cues.seen_with(None if landmark is None else landmark.lag_m)
+        if landmark is not None and landmark.drives_on and seen.ahead_open:
             # drive on past the openings before the one to turn into: along the held heading
-            return keep_within(fused, -cues.held_turn_rad, DRIVE_ON_RAD)
+            return keep_within(fused, -seen.held_turn_rad, DRIVE_ON_RAD)
         if landmark is not None and landmark.kind == "turned":
             # a turn to a side is met only by turning that way: where the turn's rows pull the
             # other way (the robot is not where the teacher turned), drive straight on instead
@@ -189,6 +192,11 @@ class NetworkRuntime:
         for name, w in weights.items():
             v += w * outputs.vectors[0, names.index(name)]
         return v
+
+
+def _lag_of(found: tuple[Path, Step] | None) -> float | None:
+    """The lag the landmark of the active step ``found`` is sensed with (None: the default)."""
+    return None if found is None or found[1].landmark is None else found[1].landmark.lag_m
 
 
 def keep_within(v: np.ndarray, centre_rad: float, half_rad: float) -> np.ndarray:

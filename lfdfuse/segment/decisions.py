@@ -154,6 +154,11 @@ class DecisionParams:
     #: closely the learned fusion followed them on the demo: the fusion replayed on the
     #: teacher's track turns where the teacher already turns
     junctions: bool = True
+    #: a teacher's turn with no onset near it on the default sensor (its sectors still swinging
+    #: through the turn of a corner just before a spur) is looked for on the track's ``short``
+    #: sensor, its sectors held this far back (None: not looked for); the landmarks of a
+    #: decision found there name that lag, and the runtime senses them with it
+    short_lag_m: float | None = 1.5
 
 
 @dataclass(frozen=True)
@@ -177,6 +182,8 @@ class DecisionPoint:
     cue: OpeningCue = OpeningCue.ALL  # how the opening is recognised
     within_m: float | None = None  # DISTANCE: the tolerance on ``odometry_m``
     ahead_open: bool | None = None  # the opening's shape, when the landmark names it
+    #: the landmarks are sensed with the sectors held this far back (None: the sensor's default)
+    lag_m: float | None = None
 
 
 def _largest_rise(x: np.ndarray) -> float:
@@ -261,86 +268,120 @@ def find_decisions(
             must = own and any(a <= f < b for f in forced)
             if a < since:
                 continue
-            s = 0 if sgn > 0 else 1
             ref = max(a - p.lookback, since)
             turned = sgn * np.cumsum(track.turn_rad[ref + 1 : min(b + p.rise_steps, hi)])
             if not len(turned) or _largest_rise(turned) < p.min_turn_rad:
                 continue  # the teacher did not really turn that way (from any heading it held before)
-            d = onset_near(track, s, ref, min(b + p.lookahead, hi), a, p.began_rad)
-            if d is None:
-                continue  # no opening the robot could recognise: not expressible as a landmark
-            q = replace(p, landmark=cues[d]) if cues and d in cues else p
-            odo = float(track.step_m[since : d + 1].sum())
-            at_start = odo < p.at_start_m
-            if own and not must and (at_start or not opening_open_ahead(track, d, since, p.shape_steps)):
-                continue  # the teacher's own turn is a decision only off a way that goes on
-            if (
-                not at_start
-                and not must
-                and p.skip_corners
-                and is_corner(track, s, d, since, shape_steps=p.shape_steps, other_steps=p.corner_other_steps)
-            ):
-                continue  # a corner: the teacher turned where there was no other way
-            nth = opening_order(track, s, since, d, q.landmark, q.passing)
-            within = (
-                distance_tolerance(track, s, since, d, odo, share=q.within_share, min_m=q.within_min_m)
-                if q.landmark == OpeningCue.DISTANCE
-                else None
-            )
-            if at_start:
-                d = since  # the turn step is all of it: the robot turns where the goal left it
-            if d in whole:  # keyed by the decision's onset as written
-                q = replace(q, turn_share=1.0, turn_margin_rad=0.0)
-            # the turn landmark counts from the heading the sectors were held at when the turn
-            # step began (the heading before the turn, for teacher and robot alike, however
-            # early either began to turn): this share of the teacher's largest turn from it
-            heading = np.cumsum(track.turn_rad)
-            look = min(max(b + 25, d + q.settle_steps), hi)
-            from_held = sgn * (heading[d:look] - heading[d] + track.held_rad[d])
-            # ... and at least ``turn_after_rad`` beyond where the teacher had turned at the onset
-            # (met mid-turn, a share of the whole would leave the step a sliver of the turn), but
-            # never beyond the teacher's whole turn
-            want = max(q.turn_share * from_held.max(), min(from_held[0] + q.turn_after_rad, from_held.max()))
-            if q.turn_margin_rad is not None:
-                want = max(want, from_held.max() - q.turn_margin_rad)
-            angle = float(np.clip(want, q.min_angle_rad, q.max_angle_rad))
-            reach = np.nonzero(from_held[1:] >= angle)[0]
-            end = d + 1 + int(reach[0]) if len(reach) else hi
-            if must and end + p.min_steps >= hi:
-                # the goal came while the teacher still turned: the turn as far as it went a
-                # moment before the goal, the rest that moment
-                end = hi - p.min_steps
-                if end <= d + 1:
-                    continue
-                angle = float(from_held[end - d])
-                if angle < q.min_angle_rad:
-                    continue
-            if end + 1 >= hi:
-                continue  # the goal came first: nothing left to steer after the turn
-            div = float(np.abs(raw[a:b][valid[a:b]]).mean())
-            begin = turn_began(heading, track.held_rad, d, max(since, d - p.lookback), sgn, p.began_rad)
-            out.append(
-                DecisionPoint(
-                    seg.index,
-                    SIDES[s],
-                    d,
-                    end,
-                    nth,
-                    since,
-                    odo,
-                    angle,
-                    div,
-                    at_start,
-                    begin,
-                    OpeningCue(q.landmark),
-                    within,
-                    opening_open_ahead(track, d, since, p.shape_steps)
-                    if p.shape and not at_start and not must
-                    else None,
-                )
-            )
-            since = end
+            turn = _Turn(seg.index, a, b, sgn, own, must, since, hi)
+            views = [track] if p.short_lag_m is None or track.short is None else [track, track.short]
+            # the default sectors first; where they sense no opening there that makes a decision
+            # (still swinging through the turn of a corner just before a spur), sectors held a
+            # shorter way back
+            for tr in views:
+                dp = _decision(tr, turn, p, cues, whole, float(np.abs(raw[a:b][valid[a:b]]).mean()))
+                if dp is not None:
+                    out.append(replace(dp, lag_m=None if tr is track else tr.params.lag_m))
+                    since = dp.turn_end
+                    break
     return out
+
+
+@dataclass(frozen=True)
+class _Turn:
+    """A teacher's turn that may be a decision: steps ``[a, b)`` of goal segment ``segment``
+    (its steps ``[.., hi)``) toward ``sgn``, in the sub-segment from ``since``."""
+
+    segment: int
+    a: int
+    b: int
+    sgn: float
+    own: bool  # the teacher's own turn, found without a divergence
+    must: bool  # a forced decision
+    since: int
+    hi: int
+
+
+def _decision(
+    tr: LandmarkTrack,
+    t: _Turn,
+    p: DecisionParams,
+    cues: Mapping[int, OpeningCue] | None,
+    whole: Collection[int],
+    div: float,
+) -> DecisionPoint | None:
+    """The decision at turn ``t`` as the openings of ``tr`` express it, or None (no opening the
+    robot could recognise there, or the turn was none to decide: see :func:`find_decisions`)."""
+    a, b, sgn, own, must, since, hi = t.a, t.b, t.sgn, t.own, t.must, t.since, t.hi
+    s = 0 if sgn > 0 else 1
+    ref = max(a - p.lookback, since)
+    d = onset_near(tr, s, ref, min(b + p.lookahead, hi), a, p.began_rad)
+    if d is None:
+        return None  # no opening the robot could recognise: not expressible as a landmark
+    q = replace(p, landmark=cues[d]) if cues and d in cues else p
+    odo = float(tr.step_m[since : d + 1].sum())
+    at_start = odo < p.at_start_m
+    if own and not must and (at_start or not opening_open_ahead(tr, d, since, p.shape_steps)):
+        return None  # the teacher's own turn is a decision only off a way that goes on
+    if (
+        not at_start
+        and not must
+        and p.skip_corners
+        and is_corner(tr, s, d, since, shape_steps=p.shape_steps, other_steps=p.corner_other_steps)
+    ):
+        return None  # a corner: the teacher turned where there was no other way
+    nth = opening_order(tr, s, since, d, q.landmark, q.passing)
+    within = (
+        distance_tolerance(tr, s, since, d, odo, share=q.within_share, min_m=q.within_min_m)
+        if q.landmark == OpeningCue.DISTANCE
+        else None
+    )
+    if at_start:
+        d = since  # the turn step is all of it: the robot turns where the goal left it
+    if d in whole:  # keyed by the decision's onset as written
+        q = replace(q, turn_share=1.0, turn_margin_rad=0.0)
+    # the turn landmark counts from the heading the sectors were held at when the turn
+    # step began (the heading before the turn, for teacher and robot alike, however
+    # early either began to turn): this share of the teacher's largest turn from it
+    heading = np.cumsum(tr.turn_rad)
+    look = min(max(b + 25, d + q.settle_steps), hi)
+    from_held = sgn * (heading[d:look] - heading[d] + tr.held_rad[d])
+    # ... and at least ``turn_after_rad`` beyond where the teacher had turned at the onset
+    # (met mid-turn, a share of the whole would leave the step a sliver of the turn), but
+    # never beyond the teacher's whole turn
+    want = max(q.turn_share * from_held.max(), min(from_held[0] + q.turn_after_rad, from_held.max()))
+    if q.turn_margin_rad is not None:
+        want = max(want, from_held.max() - q.turn_margin_rad)
+    angle = float(np.clip(want, q.min_angle_rad, q.max_angle_rad))
+    reach = np.nonzero(from_held[1:] >= angle)[0]
+    end = d + 1 + int(reach[0]) if len(reach) else hi
+    if must and end + p.min_steps >= hi:
+        # the goal came while the teacher still turned: the turn as far as it went a
+        # moment before the goal, the rest that moment
+        end = hi - p.min_steps
+        if end <= d + 1:
+            return None
+        angle = float(from_held[end - d])
+        if angle < q.min_angle_rad:
+            return None
+    if end + 1 >= hi:
+        return None  # the goal came first: nothing left to steer after the turn
+    begin = turn_began(heading, tr.held_rad, d, max(since, d - p.lookback), sgn, p.began_rad)
+    return DecisionPoint(
+        t.segment,
+        SIDES[s],
+        d,
+        end,
+        nth,
+        since,
+        odo,
+        angle,
+        div,
+        at_start,
+        begin,
+        OpeningCue(q.landmark),
+        within,
+        opening_open_ahead(tr, d, since, p.shape_steps) if p.shape and not at_start and not must else None,
+    )
 
 
 def split_segments(

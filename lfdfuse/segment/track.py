@@ -10,7 +10,7 @@ written from this track is one the runtime can meet.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import StrEnum
 
 import numpy as np
@@ -39,15 +39,30 @@ class LandmarkTrack:
     ranges_m: np.ndarray
     geometry: ScanGeometry
     params: OpeningParams
+    #: the same steps as a sensor with the sectors held a shorter way back sees them (None: not
+    #: looked at): where a spur opens a few metres past a corner, the default sectors are still
+    #: swinging through the corner's turn as the opening passes and sense no onset there
+    short: LandmarkTrack | None = None
 
 
 def landmark_track(
-    ranges_m: np.ndarray, geometry: ScanGeometry, pose: np.ndarray, params: OpeningParams = OpeningParams()
+    ranges_m: np.ndarray,
+    geometry: ScanGeometry,
+    pose: np.ndarray,
+    params: OpeningParams = OpeningParams(),
+    *,
+    short_lag_m: float | None = None,
 ) -> LandmarkTrack:
-    """Cues from scans ``(N, B)`` and odometry poses ``(N, 3)`` (only their increments are used)."""
+    """Cues from scans ``(N, B)`` and odometry poses ``(N, 3)`` (only their increments are used);
+    with ``short_lag_m``, also as the sensor holding its sectors that far back sees them (``short``)."""
     step_m, turn = odometry_increments(pose)
     onsets, held = sensed_onsets(ranges_m, geometry, step_m, turn, params)
-    return LandmarkTrack(onsets, step_m, turn, held, np.asarray(ranges_m), geometry, params)
+    short = (
+        None
+        if short_lag_m is None
+        else landmark_track(ranges_m, geometry, pose, replace(params, lag_m=short_lag_m))
+    )
+    return LandmarkTrack(onsets, step_m, turn, held, np.asarray(ranges_m), geometry, params, short)
 
 
 class OpeningCue(StrEnum):

@@ -30,6 +30,7 @@ from lfdfuse.network.driver import NetworkDriver
 from lfdfuse.network.landmarks import Ahead, Cues, Landmark, Progress
 from lfdfuse.network.runtime import DRIVE_ON_RAD, NetworkRuntime, keep_within
 from lfdfuse.network.table import dump_table, parse_table
+from lfdfuse.segment.decisions import DecisionParams
 from lfdfuse.segment.read import read_segmented
 from lfdfuse.sim.loop import run as sim_run
 from lfdfuse.sim.robot import Pose
@@ -454,3 +455,29 @@ def test_the_turn_out_of_a_spur_keeps_to_its_side_and_then_to_the_corridor(
     monkeypatch.setattr(NetworkRuntime, "_steer", drive_on_only)
     goals, _ = drive()
     assert goals == ["red", "green"]
+
+
+def test_a_spur_just_past_a_corner_is_decided_and_driven_with_the_shorter_lag(tmp_path: Path) -> None:
+    """Generated world 1538 (held apart; stop 34: no decision in green's step): green sits in a
+    spur on the right a few metres past a corner left. The default sectors still swing through
+    the corner's turn as the teacher passes the spur and sense no opening there; the sensor
+    holding its sectors 1.5 m back does. The sub-goal table (no check) names that lag in green's
+    landmarks and, from the teacher's start, completes the task; without the shorter lag there is
+    no decision in green's step and the robot never reaches green."""
+    world = generate_offroute(1538)
+    demo = learn.demonstrate(THREE_GOALS, world=world, folder=tmp_path, name="d", duration_s=900.0, seed=1)
+    run, raw = read_segmented(demo.segmented), read_run(demo.segmented)
+    paper = learn.learn_run(run, options=learn.LearnOptions(EstimateOptions()), name="d").table
+    track = track_of(raw, run)
+    max_t = float(math.ceil(TIME_FACTOR * demo.duration_s / 10.0) * 10.0)
+
+    def drive(params: DecisionParams) -> tuple[list[str], list[float | None]]:
+        res = refine(paper, run, track, opts=EstimateOptions(), params=params)
+        rng = np.random.default_rng(0)
+        drv = NetworkDriver(table=res.table, world=world, sensors=SensorParams(), rng=rng)
+        sim = Simulator(world, rng, SensorParams(), drv.robot)
+        got = sim_run(sim, drv, start=Pose(*world.start), duration_s=max_t)
+        return [g for g, _ in got.reached], [d.lag_m for d in res.decisions if d.segment == 1]
+
+    assert drive(DecisionParams()) == (["red", "green", "blue"], [1.5])
+    assert drive(DecisionParams(short_lag_m=None)) == (["red"], [])

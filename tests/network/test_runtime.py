@@ -227,3 +227,47 @@ def test_the_step_after_a_turn_keeps_to_the_heading_the_turn_ended_on(
             assert math.isclose(off, max(-SETTLE_RAD, min(SETTLE_RAD, want)), abs_tol=1e-9)
         else:
             assert np.allclose(dec.fused, raw)
+
+
+def _lagged(lag: float | None) -> FusionTable:
+    """Drive on to the 1st opening on the left, turn 1 rad left, reach red (``wander`` alone);
+    both landmarks sensed with ``lag`` (None: the default sensor)."""
+    sensed = {} if lag is None else {"lag_m": lag}
+    rows = [{"bac": 0b0100, "weights": {"wander": 1.0}}]
+    sub = [
+        {"name": "to-left-opening-1", "landmark": {"opening": "left", "nth": 1, **sensed}, "fusion": rows},
+        {"name": "turn-left", "landmark": {"turned": "left", "angle_rad": 1.0, **sensed}, "fusion": rows},
+        {"name": "reach-red", "goal": {"target": "red"}, "fusion": rows},
+    ]
+    step = {"name": "reach-red", "goal": {"target": "red"}, "network": {"name": "reach-red", "steps": sub}}
+    return table(network={"name": "t", "steps": [step]})
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.lists(
+        st.tuples(st.booleans(), st.booleans(), st.floats(-0.5, 0.5), st.floats(-0.5, 0.5)),
+        min_size=1,
+        max_size=25,
+    ),
+    st.sampled_from([None, 1.5]),
+)
+def test_a_landmark_sensed_with_another_lag_is_met_by_that_sensor_alone(
+    ticks: list[tuple[bool, bool, float, float]], lag: float | None
+) -> None:
+    """The drive-on step ends at the first onset of the sensor its landmark names (the default
+    one's onsets, or the other's, do not end it), and the turn after it counts from the heading
+    that sensor's sectors were held at then."""
+    t = _lagged(lag)
+    rt = NetworkRuntime(t)
+    mine = [s if lag else d for d, s, _, _ in ticks]
+    for k, (default, shorter, held_d, held_s) in enumerate(ticks):
+        other = Cues(onset_left=shorter, held_turn_rad=held_s)
+        dec = rt.decide(
+            _pull(0.0), set(), Cues(onset_left=default, held_turn_rad=held_d, lagged=((1.5, other),))
+        )
+        met = any(mine[: k + 1])
+        assert step_name_of(dec.path, t) == ("reach-red/turn-left" if met else "reach-red/to-left-opening-1")
+        if met and not any(mine[:k]):  # met at this tick: the turn counts from the held heading now
+            assert rt.progress.turned_rad == (held_s if lag else held_d)
+            assert rt.progress.lag_m == lag

@@ -340,3 +340,26 @@ def test_a_corner_taken_in_two_is_a_decision_only_when_forced(
     assert find(two, []) == []
     small = replace(two, held_rad=held * (0.9 * p.blamed_turn_rad / float(np.abs(held).max())))
     assert find(small, [half - 1]) == []
+
+
+def test_a_turn_the_default_sectors_sensed_no_opening_at_is_decided_by_the_shorter_lag() -> None:
+    """Where the default sectors sensed no onset near the teacher's turn (swinging through the turn
+    of a corner just before), the opening the sensor with the shorter lag met decides, and the
+    decision names that lag; where the default sectors sensed it, they decide alone."""
+    demo, fused, seen = _turn_off()
+    _, _, blind = _turn_off(onset_at=None)
+    short = replace(seen, params=replace(seen.params, lag_m=1.5))
+    ok = np.ones(N, bool)
+
+    def found(track: LandmarkTrack, params: DecisionParams = DecisionParams()) -> list[DecisionPoint]:
+        return find_decisions(
+            segments=SEGS, demo=demo, informative=ok, fused=fused, track=track, params=params
+        )
+
+    (by_default,) = found(seen)
+    (by_short,) = found(replace(blind, short=short))
+    assert by_default.lag_m is None and by_short.lag_m == 1.5
+    assert replace(by_short, lag_m=None) == by_default  # the same opening, turn and landmarks
+    assert found(replace(seen, short=short)) == [by_default]
+    assert found(replace(blind, short=short), DecisionParams(short_lag_m=None)) == []
+    assert found(blind) == []
