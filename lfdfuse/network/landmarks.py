@@ -36,6 +36,13 @@ its own sensors — never map coordinates:
     step keeps near the heading the turn ended on for a while
     (:data:`~lfdfuse.network.runtime.SETTLE_M`), into the corridor the turn faces.
 
+Either may add ``lag_m: 1.5``: its openings and the heading its turn counts from are sensed with
+the opening sectors held 1.5 m of travel back instead of the sensor's default 2 m
+(:class:`~lfdfuse.behaviors.landmarks.OpeningSensor`; the runtime runs one sensor per lag a table
+names). ``estimate`` writes it where the default sectors sensed no opening that makes the
+teacher's turn a decision: a spur a few metres past a corner, met while the default sectors
+still swing through the corner's turn.
+
 :class:`Progress` is what a running step has sensed since it began; :meth:`Landmark.met`
 decides from it.
 """

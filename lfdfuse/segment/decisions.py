@@ -21,6 +21,12 @@ Step ``d`` (the opening's onset) is where the robot begins the turn, step ``e`` 
 landmark met) the first step after it, exactly as the runtime switches steps. The turn's
 weights are learned from where the teacher began to turn away from the learned fusion, if
 that was earlier (``begin``).
+
+A turn whose opening the default sensor does not express as a decision (no onset near it, or
+one met mid-sweep, whose shape rules the turn out) is looked at again with the track's ``short`` sensor, its
+sectors held ``short_lag_m`` back: a spur a few metres past a corner, passed while the default
+sectors still swing through the corner's turn. The decision then names that lag (``lag_m``) and
+the runtime senses its landmarks with a sensor of that lag.
 """
 
 from __future__ import annotations
