@@ -139,10 +139,11 @@ class NetworkRuntime:
     def _steer(self, fused: np.ndarray, step: Step, cues: Cues) -> np.ndarray:
         """The fused vector, kept to the way a sub-goal step goes (its length kept)."""
         landmark = step.landmark
-        seen = cues.seen_with(None if landmark is None else landmark.lag_m)
-        if landmark is not None and landmark.drives_on and seen.ahead_open:
-            # drive on past the openings before the one to turn into: along the held heading
-            return keep_within(fused, -seen.held_turn_rad, DRIVE_ON_RAD)
+        if landmark is not None and landmark.drives_on and cues.ahead_open:
+            # drive on past the openings before the one to turn into: along the held heading (of
+            # the default sensor, whatever sensor the landmark is met with: sectors held further
+            # back follow the robot's drift toward an opening more slowly)
+            return keep_within(fused, -cues.held_turn_rad, DRIVE_ON_RAD)
         if landmark is not None and landmark.kind == "turned":
             # a turn to a side is met only by turning that way: where the turn's rows pull the
             # other way (the robot is not where the teacher turned), drive straight on instead

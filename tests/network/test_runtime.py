@@ -103,12 +103,14 @@ def test_the_fused_vector_is_the_weighted_sum_of_applicable_outputs(app: list[bo
         assert np.allclose(dec.fused, expect)
 
 
-def _drive_on(ahead: str | None) -> FusionTable:
+def _drive_on(ahead: str | None, lag: float | None = None) -> FusionTable:
     """One goal step whose first sub-step drives on to the 1st opening on the left, of shape
-    ``ahead``, with ``wander`` alone."""
+    ``ahead`` (sensed with ``lag``), with ``wander`` alone."""
     landmark: dict[str, Any] = {"opening": "left", "nth": 1, "odometry_m": 50.0}
     if ahead is not None:
         landmark["ahead"] = ahead
+    if lag is not None:
+        landmark["lag_m"] = lag
     step = {
         "name": "reach-red",
         "goal": {"target": "red"},
@@ -128,18 +130,27 @@ def _drive_on(ahead: str | None) -> FusionTable:
 
 
 @settings(max_examples=60, deadline=None)
-@given(st.floats(-3.1, 3.1), st.floats(-1.0, 1.0), st.booleans(), st.sampled_from(["open", "closed", None]))
+@given(
+    st.floats(-3.1, 3.1),
+    st.floats(-1.0, 1.0),
+    st.booleans(),
+    st.sampled_from(["open", "closed", None]),
+    st.sampled_from([None, 1.5]),
+)
 def test_a_step_driving_on_to_a_side_opening_keeps_near_the_held_heading(
-    pull: float, held: float, ahead_open: bool, shape: str | None
+    pull: float, held: float, ahead_open: bool, shape: str | None, lag: float | None
 ) -> None:
     """Driving on to a side opening (the way ahead goes on there), the fused heading stays within
     DRIVE_ON_RAD of the held heading while the way ahead is open, its length kept; otherwise (a
-    corner ahead, or an opening where the way ends) the row's fusion is untouched."""
+    corner ahead, or an opening where the way ends) the row's fusion is untouched. The heading and
+    the way ahead are the default sensor's, whatever sensor the landmark is met with."""
     vec = np.zeros((4, 2))
     vec[2] = [2.0 * math.cos(pull), 2.0 * math.sin(pull)]
-    cues = Cues(held_turn_rad=held, ahead_open=ahead_open)
-    dec = NetworkRuntime(_drive_on(shape)).decide(outputs(vec, [False, False, True, False]), set(), cues)
-    assert step_name_of(dec.path, _drive_on(shape)) == "reach-red/to-left-opening-1"
+    other = Cues(held_turn_rad=-held, ahead_open=not ahead_open)
+    cues = Cues(held_turn_rad=held, ahead_open=ahead_open, lagged=((1.5, other),))
+    t = _drive_on(shape, lag)
+    dec = NetworkRuntime(t).decide(outputs(vec, [False, False, True, False]), set(), cues)
+    assert step_name_of(dec.path, t) == "reach-red/to-left-opening-1"
     assert math.isclose(float(np.hypot(*dec.fused)), 2.0)
     off = math.atan2(dec.fused[1], dec.fused[0]) + held  # from the held heading (at -held)
     off = math.atan2(math.sin(off), math.cos(off))
