@@ -9,7 +9,8 @@ import typer
 
 from lfdfuse.cli.app import app
 from lfdfuse.cli.common import check_outputs, console, err_console, user_errors
-from lfdfuse.drive.session import DriveOptions, DriveSummary, drive
+from lfdfuse.drive.options import DriveOptions, DriveSummary
+from lfdfuse.drive.session import drive
 from lfdfuse.network.table import load_table
 
 

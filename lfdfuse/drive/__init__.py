@@ -10,5 +10,6 @@ One module per job, data flowing down this list:
 * :mod:`~lfdfuse.drive.safety` — the clamp and the stale-scan watchdog;
 * :mod:`~lfdfuse.drive.core` — the control core: a scan in, a command out (no socket, no clock);
 * :mod:`~lfdfuse.drive.record` — the live MCAP;
+* :mod:`~lfdfuse.drive.options` — what a session is asked and what it answers;
 * :mod:`~lfdfuse.drive.session` — the socket shell: connect, reconnect, signals, duration.
 """

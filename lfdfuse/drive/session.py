@@ -24,9 +24,8 @@ import signal
 import socket
 import time
 from collections import Counter
-from collections.abc import Callable
 from contextlib import nullcontext
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -49,13 +48,11 @@ from lfdfuse.drive.decode import (
     TwistEncoder,
     twist_encoder,
 )
+from lfdfuse.drive.options import DriveError, DriveOptions, DriveSummary, Notify, Stopper
 from lfdfuse.drive.record import LiveRecorder
-from lfdfuse.drive.safety import WATCHDOG_PERIOD_S, Limits, limits_of
-from lfdfuse.errors import LfdError
+from lfdfuse.drive.safety import WATCHDOG_PERIOD_S, limits_of
 from lfdfuse.log.writer import LogWriter
-from lfdfuse.network.table import FusionTable
 
-Notify = Callable[[str], None]
 #: the first connection must open within this (a later one is retried while --duration lasts)
 CONNECT_TIMEOUT_S = 3.0
 #: how long after connecting the scan channel must be advertised
@@ -64,66 +61,6 @@ BACKOFF_S = (0.2, 2.0)  # first retry delay, the longest
 STATUS_PERIOD_S = 5.0
 ZERO_PERIOD_S = 0.1  # the zero Twist's repeat while blind
 _OUR_CHANNEL = 1
-
-
-class DriveError(LfdError):
-    """A live run cannot start or go on (no server, no scan channel, a table it cannot run)."""
-
-
-@dataclass(frozen=True)
-class DriveOptions:
-    table: FusionTable
-    url: str
-    table_name: str = "fusion.yaml"
-    scan_topic: str = "/scan"
-    odom_topic: str = "/odom"
-    cmd_topic: str = "/cmd_vel"
-    shadow: bool = False
-    max_speed: float | None = None
-    max_turn: float | None = None
-    duration_s: float | None = None
-    command: str = "drive"
-
-
-@dataclass(frozen=True)
-class DriveSummary:
-    ticks: int  # fresh scans the network decided on
-    sent: int  # commands published (network + zero Twists)
-    zeros: int  # zero Twists of the watchdog and the exit
-    connections: int
-    duration_s: float
-    latency_ms: tuple[float, float] | None  # p50, p99 (scan arrival → command sent/computed)
-    latencies_ms: tuple[float, ...]  # every tick's, in order
-    cpu_ms: tuple[float, ...]  # the CPU time this thread spent over each tick's latency
-    agreement_deg: float | None  # --shadow: mean §12 heading error against the robot's commands
-    agreement_ticks: int
-    odometry_m: float  # path length by odometry
-    ended: str
-    encoding: str  # of our Twist ('' in --shadow)
-    limits: Limits
-    limits_from: str
-    mount_from: str
-    behaviors: Applicability | None
-    warnings: dict[str, int] = field(default_factory=dict)
-    out: str = ""
-
-
-class Stopper:
-    """Ends a session from a signal handler, a timer or a test (thread-safe via the loop)."""
-
-    def __init__(self) -> None:
-        self.reason = ""
-        self._event: asyncio.Event | None = None
-        self._loop: asyncio.AbstractEventLoop | None = None
-
-    def bind(self, loop: asyncio.AbstractEventLoop, event: asyncio.Event) -> None:
-        self._loop, self._event = loop, event
-
-    def stop(self, reason: str) -> None:
-        if not self.reason:
-            self.reason = reason
-        if self._loop is not None and self._event is not None:
-            self._loop.call_soon_threadsafe(self._event.set)
 
 
 class _Lost(Exception):

@@ -25,7 +25,8 @@ from typing import Any
 
 import numpy as np
 
-from lfdfuse.drive.session import DriveOptions, Stopper, drive
+from lfdfuse.drive.options import DriveOptions, Stopper
+from lfdfuse.drive.session import drive
 from lfdfuse.evaluate.roundtrip import load_truth
 
 GOAL_P99_MS = 10.0

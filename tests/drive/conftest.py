@@ -9,7 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from lfdfuse.drive.session import DriveOptions, DriveSummary, Stopper, drive
+from lfdfuse.drive.options import DriveOptions, DriveSummary, Stopper
+from lfdfuse.drive.session import drive
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
 from lfdfuse.network.table import FusionTable, write_table
 from lfdfuse.segment.pipeline import segment_file
