@@ -44,12 +44,12 @@ from lfdfuse.network.driver import NetworkDriver
 from lfdfuse.network.table import load_table
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sim.sensors import ScanGeometry
+from lfdfuse.sources.teleop.clock import SimClock
 from lfdfuse.sources.teleop.inputs import Input
 from lfdfuse.sources.teleop.keys import HELP, KeyDecoder
 from lfdfuse.sources.teleop.script import ScriptInput, load_script
 from lfdfuse.sources.teleop.session import (
     HANDBACK_KEY,
-    SimClock,
     TeleopOptions,
     TeleopSession,
     make_session,

@@ -39,6 +39,7 @@ from lfdfuse.log.reader import file_info, iter_messages
 from lfdfuse.log.schemas import schema
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sim.sensors import SensorParams
+from lfdfuse.sources.teleop.clock import SimClock
 from lfdfuse.sources.teleop.inputs import Input, TwistError, decode_teleop_input, parse_twist
 from lfdfuse.sources.teleop.keys import MOVES, KeyDecoder, KeyState, press
 from lfdfuse.sources.teleop.script import (
@@ -51,7 +52,6 @@ from lfdfuse.sources.teleop.script import (
     write_csv,
 )
 from lfdfuse.sources.teleop.session import (
-    SimClock,
     TeleopOptions,
     TeleopSession,
     make_session,

@@ -21,9 +21,10 @@ from lfdfuse.log.reader import file_info, iter_messages
 from lfdfuse.network.table import FusionTable, dump_table, load_table
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sim.sensors import SensorParams
+from lfdfuse.sources.teleop.clock import SimClock
 from lfdfuse.sources.teleop.inputs import Input, decode_teleop_input
 from lfdfuse.sources.teleop.script import ScriptInput, parse_yaml
-from lfdfuse.sources.teleop.session import SimClock, TeleopOptions, make_session
+from lfdfuse.sources.teleop.session import TeleopOptions, make_session
 from tests.conftest import ROOT, mcap_check
 from tests.sources.teleop.correction import CORRIDOR_TABLE, Fed
 

@@ -23,34 +23,31 @@ from __future__ import annotations
 
 import math
 import signal
-import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import FrameType
-from typing import Literal, Protocol
+from typing import Literal
 
 import numpy as np
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.log import lfd
 from lfdfuse.log.recorder import Recorder, provenance
 from lfdfuse.log.writer import LogWriter
 from lfdfuse.sim.loop import GoalSource, RunSummary, Sink, run
 from lfdfuse.sim.robot import Pose, RobotParams
 from lfdfuse.sim.sensors import CameraParams, SensorParams, target_reached
 from lfdfuse.sim.simulator import Observation, Simulator
+from lfdfuse.sources.teleop.clock import Clock, WallClock
 from lfdfuse.sources.teleop.inputs import (
-    SCHEMA,
-    TOPIC,
     Input,
     InputSource,
     TwistError,
     parse_twist,
-    teleop_input,
 )
 from lfdfuse.sources.teleop.keys import KeyState, press
+from lfdfuse.sources.teleop.record import AuthorityRecorder, InputRecorder
 from lfdfuse.world.model import World, check_pose_free
 
 #: a run without ``--duration`` still ends: two hours of driving is a very long demonstration
@@ -63,40 +60,6 @@ MIN_TIMEOUT_S = 0.5
 HANDBACK_KEY = "h"
 
 Authority = Literal["network", "person"]
-
-
-class Clock(Protocol):
-    """Seconds since an arbitrary origin, and a wait until a time (never longer than one period:
-    a stop is seen at the next period, so no wait needs to be cut short)."""
-
-    def now(self) -> float: ...
-
-    def wait_until(self, t_s: float) -> None: ...
-
-
-class WallClock:
-    """Real time (``time.monotonic``)."""
-
-    def now(self) -> float:
-        return time.monotonic()
-
-    def wait_until(self, t_s: float) -> None:
-        delay = t_s - time.monotonic()
-        if delay > 0:
-            time.sleep(delay)  # a signal's handler runs during it (PEP 475 resumes the rest)
-
-
-class SimClock:
-    """Simulated time: waiting only moves the clock, so scripted runs go as fast as they can."""
-
-    def __init__(self) -> None:
-        self.t_s = 0.0
-
-    def now(self) -> float:
-        return self.t_s
-
-    def wait_until(self, t_s: float) -> None:
-        self.t_s = max(self.t_s, t_s)
 
 
 @dataclass(frozen=True)
@@ -371,35 +334,6 @@ class TeleopSession:
             self._met_last[d.name] = obs.k
 
 
-class AuthorityRecorder:
-    """A sink writing who drove each period on ``/lfd/authority`` (runs with a network)."""
-
-    def __init__(self, log: LogWriter, session: TeleopSession) -> None:
-        self.log, self.session = log, session
-        log.add_topic(lfd.Authority.TOPIC, lfd.Authority.SCHEMA)
-
-    def record(self, obs: Observation, command: tuple[float, float]) -> None:
-        s = self.session
-        self.log.write_raw(
-            lfd.Authority.TOPIC, obs.t_ns, lfd.encode_authority(obs.t_ns, s.authority, s.authority_source)
-        )
-
-
-class InputRecorder:
-    """A sink writing the session's inputs of each period on ``/teleop/input``."""
-
-    def __init__(self, log: LogWriter, session: TeleopSession) -> None:
-        self.log, self.session = log, session
-        log.add_topic(TOPIC, SCHEMA)
-
-    def record(self, obs: Observation, command: tuple[float, float]) -> None:
-        for inp, effect, cmd, wall in self.session.records:
-            self.log.write(
-                TOPIC, obs.t_ns, teleop_input(obs.t_ns, inp, effect=effect, command=cmd, wall_s=wall)
-            )
-        self.session.records.clear()
-
-
 @dataclass(frozen=True)
 class TeleopSummary:
     run: RunSummary
@@ -414,7 +348,7 @@ def make_session(
     clock: Clock | None = None,
     network: GoalSource | None = None,
 ) -> TeleopSession:
-    """The session for a run: real time unless a clock is given (a :class:`SimClock` for scripts);
+    """The session for a run: real time unless a clock is given (a :class:`~lfdfuse.sources.teleop.clock.SimClock` for scripts);
     with ``network``, the network drives until the person takes over."""
     if opts.duration_s is not None and not (opts.duration_s > 0 and math.isfinite(opts.duration_s)):
         raise ConfigError("duration must be a positive number of seconds")

@@ -10,9 +10,10 @@ from pathlib import Path
 
 from lfdfuse.execute.correct import correct, correction_driver
 from lfdfuse.network.table import load_table
+from lfdfuse.sources.teleop.clock import SimClock
 from lfdfuse.sources.teleop.inputs import Input
 from lfdfuse.sources.teleop.script import ScriptInput, parse_yaml
-from lfdfuse.sources.teleop.session import SimClock, TeleopOptions, make_session
+from lfdfuse.sources.teleop.session import TeleopOptions, make_session
 from lfdfuse.world.model import load_world
 from tests.conftest import ROOT
 
