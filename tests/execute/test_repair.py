@@ -39,12 +39,17 @@ GEOM = ScanGeometry(-math.pi / 2, math.pi / 2, 3, 8.0)
 
 
 def test_a_table_that_leaves_the_teacher_in_the_demo_world_is_repaired(tmp_path: Path) -> None:
-    """Generated world 117 (a tuning world): the sub-goal table learned by replay drives past the
-    spur green is in, from the teacher's own start; the check makes the teacher's turn into it
-    a decision, and the repaired table completes the task from that start."""
+    """Generated world 117 (a tuning world): the sub-goal table learned by replay with the default
+    opening sensor alone drives past the spur green is in, from the teacher's own start; the check
+    makes the teacher's turn into it a decision, and the repaired table completes the task from
+    that start. (With the shorter-lag sensor the turn is a decision at once, and nothing needs
+    repair: ``DecisionParams.short_lag_m``.)"""
     world = generate_offroute(117)
     demo = learn.demonstrate(THREE_GOALS, world=world, folder=tmp_path, name="d", duration_s=900.0, seed=1)
-    res = learn.learn([demo.segmented], options=learn.LearnOptions(subgoals=True, check_starts=0))
+    alone = DecisionParams(short_lag_m=None)
+    res = learn.learn(
+        [demo.segmented], options=learn.LearnOptions(subgoals=True, check_starts=0, decisions=alone)
+    )
     rep = res.repair
     assert rep is not None and rep.changed and rep.amends.forced
     (before,), (after,) = rep.checks[0], rep.kept
