@@ -106,6 +106,17 @@ class DecisionParams:
     fresh worlds 148 → 169 of 240 (62 % → 70 %). Written with the turns of
     the way out of a spur too (the way ahead closed: a T), it completed 166 on the tuning seeds:
     left out.
+
+    Stop 35 (``short_lag_m``): of the 30 failed runs on fresh seeds 1480-1559, 18 had no decision
+    in green's step, a spur a few metres past a corner (1484, 1496, 1519, 1520, 1528, 1538). Every
+    sector held 1.5 m back instead of 2 m found green's decision in three of them, but completed
+    86 → 70 of the first 90 tuning runs: left out. Looked for with sectors held 1.5 m back only
+    where the default ones make no decision of a teacher's turn, these six worlds complete 5 of
+    their 18 runs (none before; 1520 2, 1538 3; 1484 decides green and fails at blue's T; the other
+    three still find nothing). On 80 fresh worlds (1560-1639) it changed no table: 114 and 109 of
+    120 as before (run with the flag of every refine: a decision with ``lag_m`` was made in two
+    worlds' candidates, and neither's table changed). Not run again on the tuning seeds; there,
+    world 117 now decides green's turn at once where the check had to repair the table.
     """
 
     divergence_rad: float = math.radians(15.0)  # demo vs fused heading (smoothed): a different way
