@@ -3,21 +3,33 @@ person's inputs on ``/teleop/input`` and, with a network, who drove on ``/lfd/au
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from lfdfuse.log import lfd
 from lfdfuse.log.writer import LogWriter
 from lfdfuse.sim.simulator import Observation
-from lfdfuse.sources.teleop.inputs import SCHEMA, TOPIC, teleop_input
+from lfdfuse.sources.teleop.inputs import SCHEMA, TOPIC, Input, teleop_input
 
-if TYPE_CHECKING:
-    from lfdfuse.sources.teleop.session import TeleopSession
+
+class Recorded(Protocol):
+    """What the sinks read of a :class:`~lfdfuse.sources.teleop.session.TeleopSession`."""
+
+    @property
+    def authority(self) -> str:
+        """Who drives now: ``network`` or ``person``."""
+
+    @property
+    def authority_source(self) -> str:
+        """The person's input source that took over ("" before)."""
+
+    #: the period's inputs (input, effect, command, wall-clock s), drained by the input sink
+    records: list[tuple[Input, str, tuple[float, float], float]]
 
 
 class AuthorityRecorder:
     """A sink writing who drove each period on ``/lfd/authority`` (runs with a network)."""
 
-    def __init__(self, log: LogWriter, session: TeleopSession) -> None:
+    def __init__(self, log: LogWriter, session: Recorded) -> None:
         self.log, self.session = log, session
         log.add_topic(lfd.Authority.TOPIC, lfd.Authority.SCHEMA)
 
@@ -31,7 +43,7 @@ class AuthorityRecorder:
 class InputRecorder:
     """A sink writing the session's inputs of each period on ``/teleop/input``."""
 
-    def __init__(self, log: LogWriter, session: TeleopSession) -> None:
+    def __init__(self, log: LogWriter, session: Recorded) -> None:
         self.log, self.session = log, session
         log.add_topic(TOPIC, SCHEMA)
 
