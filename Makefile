@@ -27,7 +27,7 @@ demo: install
 	$(LFD) estimate $(DEMO)/task.seg.mcap -o $(DEMO)/task.yaml
 	$(LFD) execute $(DEMO)/task.yaml --start 3.5,1.0,0.2 --max-time 300 -o $(DEMO)/task-run.mcap --report $(DEMO)/task-run.json
 	@echo "Open $(DEMO)/*-run.mcap in Foxglove or Lichtblick: map, robot, laser and the fusion arrows (/lfd/overlay)."
-	$(PY) -m lfdfuse.tools.demo_check $(DEMO)
+	$(PY) -m tests.support.demo_check $(DEMO)
 
 # on every core (pytest-xdist; work stealing, so one long closed loop does not hold the rest back)
 test: install
@@ -43,10 +43,10 @@ lint: install
 	$(VENV)/bin/mypy
 
 bench: install
-	$(PY) -m lfdfuse.tools.bench --out build/bench.json
+	$(PY) -m tests.bench.run --out build/bench.json
 
 sample-logs: install
-	$(PY) -m lfdfuse.tools.samples sample_logs
+	$(PY) -m tests.support.samples sample_logs
 
 paper: install
 	$(LFD) report -o build/paper

@@ -150,7 +150,7 @@ def learn(
     options: LearnOptions = LearnOptions(),
     progress: Progress | None = None,
 ) -> LearnResult:
-    """The fusion table of segmented demo logs, pooled (:mod:`lfdfuse.estimate.pool`): a row's
+    """The fusion table of segmented demo logs, pooled (:mod:`lfdfuse.estimate.demo_alignment`): a row's
     likelihood is the product over the demos that met its (step, BAC); each demo keeps its own
     lag (its segmentation's). A correction log (``teleop --table``, segmented) is one more demo
     whose network-driven ticks are non-informative, so only the person's ticks change rows."""

@@ -1,4 +1,5 @@
-"""The library never prints, exits or imports typer/rich; only lfdfuse.cli does."""
+"""The library never prints, exits or imports typer/rich; only lfdfuse.cli does. The package is
+what a user runs: benchmarks and test support live under tests/, and nothing in lfdfuse/ reaches them."""
 
 from __future__ import annotations
 
@@ -10,12 +11,8 @@ LIB = Path(__file__).resolve().parents[1] / "lfdfuse"
 
 
 def _library_files() -> list[Path]:
-    """Every library module: all but the CLI and the developer tools (bench, sample logs), which may print."""
-    return [
-        p
-        for p in LIB.rglob("*.py")
-        if not {"cli", "tools"} & set(p.relative_to(LIB).parts) and p.name != "__main__.py"
-    ]
+    """Every library module: all but the CLI, which prints."""
+    return [p for p in LIB.rglob("*.py") if "cli" not in p.relative_to(LIB).parts and p.name != "__main__.py"]
 
 
 def test_library_does_not_import_the_cli_stack() -> None:
@@ -30,6 +27,44 @@ def test_library_does_not_import_the_cli_stack() -> None:
             for n in names:
                 assert n.split(".")[0] not in ("typer", "rich", "click"), f"{path} imports {n}"
                 assert not n.startswith("lfdfuse.cli"), f"{path} imports the CLI"
+
+
+def _reaches_into_tests(source: str) -> list[str]:
+    """The modules under tests/ that ``source`` imports, by statement or by name through importlib."""
+    found: list[str] = []
+    for node in ast.walk(ast.parse(source)):
+        names: list[str] = []
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+            names = [node.module]
+        elif isinstance(node, ast.Call) and node.args and isinstance(node.args[0], ast.Constant):
+            func = node.func
+            called = func.attr if isinstance(func, ast.Attribute) else getattr(func, "id", "")
+            if called in ("import_module", "__import__") and isinstance(node.args[0].value, str):
+                names = [node.args[0].value]
+        found += [n for n in names if n.split(".")[0] == "tests"]
+    return found
+
+
+def test_the_tests_import_finder_sees_statements_and_importlib() -> None:
+    probe = (
+        "import importlib\nfrom tests.support import offroute\nimport testsuite\n"
+        "def f():\n    return importlib.import_module('tests.bench.world')\n"
+    )
+    assert _reaches_into_tests(probe) == ["tests.support", "tests.bench.world"]
+
+
+def test_package_does_not_reach_into_tests() -> None:
+    """tests/ (benchmarks, generated-world experiments, test robots) is not in the wheel: no module
+    of lfdfuse/ may import it."""
+    bad = [f"{p} imports {n}" for p in LIB.rglob("*.py") for n in _reaches_into_tests(p.read_text())]
+    assert not bad, "lfdfuse/ imports tests/:\n  " + "\n  ".join(bad)
+
+
+def test_no_benchmark_in_the_package() -> None:
+    """Benchmarks are developer tools (tests/bench, ``make bench``), not part of what a user installs."""
+    assert not sorted(LIB.rglob("bench*.py")), "benchmarks belong in tests/bench"
 
 
 def test_library_does_not_print_or_exit() -> None:

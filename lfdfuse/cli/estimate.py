@@ -10,7 +10,7 @@ import typer
 from lfdfuse.cli.app import app
 from lfdfuse.cli.common import check_outputs, console, progress_bar, seed_option, user_errors
 from lfdfuse.cli.render import print_changes, print_table
-from lfdfuse.estimate.methods import EstimateOptions, Likelihood, Method
+from lfdfuse.estimate.methods import REGISTRY, EstimateOptions, Likelihood, Method
 from lfdfuse.estimate.paper import PFParams
 from lfdfuse.estimate.smc import SMCParams
 from lfdfuse.learn import LearnOptions, learn
@@ -31,8 +31,7 @@ def estimate_cmd(
         Method.PF,
         "--method",
         "-m",
-        help="pf (exact posterior: Dirichlet prior, von Mises heading noise, tempered SMC), paper (the "
-        "paper's particle filter as published), nnls (least squares) or arbitration (best single behaviour).",
+        help="; ".join(f"{m.value}: {REGISTRY[m].label}" for m in Method) + ".",
     ),
     particles: int = typer.Option(
         SMCParams().particles,

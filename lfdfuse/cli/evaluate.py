@@ -12,6 +12,7 @@ from lfdfuse.cli.app import app
 from lfdfuse.cli.common import check_outputs, console, seed_option, user_errors
 from lfdfuse.cli.evaluate_many import print_logs
 from lfdfuse.cli.parallel import follow, one_executor, scheduler_option, workers_option
+from lfdfuse.estimate.methods import POINT_FITS, REGISTRY
 from lfdfuse.evaluate.batch import evaluate_logs
 from lfdfuse.evaluate.holdout import METHODS, reading
 from lfdfuse.files import write_text_atomic
@@ -19,8 +20,7 @@ from lfdfuse.parallel import open_executor
 
 _WHAT = {
     "fused": "the default estimator, fitted on the first part",
-    "nnls": "non-negative least squares, first part",
-    "arbitration": "best single behaviour per BAC, first part",
+    **{m.value: f"{REGISTRY[m].label}, first part" for m in POINT_FITS},
     "straight": "always straight ahead",
     "previous": "the teacher's previous heading",
     "oracle": "the default estimator fitted on the held-out steps",

@@ -8,7 +8,7 @@ from rich.table import Table
 
 from lfdfuse.behaviors.names import abbreviation, legend_entry
 from lfdfuse.cli.common import console
-from lfdfuse.estimate.methods import EstimateOptions
+from lfdfuse.estimate.methods import EstimateOptions, is_point_fit
 from lfdfuse.execute.report import help_line, verdict
 from lfdfuse.network.table import FusionRow, FusionTable, Network
 from lfdfuse.segment.goals import Segmentation, bac_summary
@@ -45,10 +45,6 @@ def bac_names(bac: int, names: tuple[str, ...] | list[str]) -> str:
     return "+".join(on) or "none"
 
 
-#: methods that fit one point: no posterior, so no std without a bootstrap (--trials K)
-_POINT_FITS = ("nnls", "arbitration")
-
-
 def print_provenance(table: FusionTable) -> None:
     """Which method made a table, from what, with which settings (its ``estimated_by``)."""
     by = dict(table.estimated_by)
@@ -75,7 +71,7 @@ def print_table(table: FusionTable) -> None:
     legend = ", ".join(legend_entry(b) for b in table.behaviors)
     by = table.estimated_by
     # a least-squares fit has no uncertainty: its std is 0 by construction unless bootstrapped
-    show_std = not (by.get("method") in _POINT_FITS and int(by.get("trials", 1)) == 1)
+    show_std = not (is_point_fit(by.get("method")) and int(by.get("trials", 1)) == 1)
     spread = (
         "weights ± std in % of the row"
         if show_std

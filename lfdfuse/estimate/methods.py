@@ -113,10 +113,15 @@ RowsFn = Callable[
 
 @dataclass(frozen=True)
 class Estimator:
-    """A method's row estimator and the provenance entries it adds to the table."""
+    """A method: its row estimator, the provenance entries it adds to the table, what it is in
+    a few words (``label``, for help texts and score tables), and whether it fits one point
+    (``point_fit``: no posterior, so a std only from bootstrap trials; ``evaluate`` scores the
+    point fits as the baselines beside the default estimator)."""
 
     rows: RowsFn
     provenance: Callable[[EstimateOptions, CommandBins | None], dict[str, object]]
+    label: str
+    point_fit: bool
 
 
 #: chains (rows × trials) per sampler pass: bounds the sampler's memory (chains × particles × κ nodes)
@@ -285,11 +290,29 @@ def _none(opts: EstimateOptions, bins: CommandBins | None) -> dict[str, object]:
 
 
 REGISTRY: dict[Method, Estimator] = {
-    Method.PF: Estimator(_pf_rows, _pf_provenance),
-    Method.PAPER: Estimator(_paper_rows, _paper_provenance),
-    Method.NNLS: Estimator(_fit_rows(nnls_weights), _none),
-    Method.ARBITRATION: Estimator(_fit_rows(arbitration_weights), _none),
+    Method.PF: Estimator(
+        _pf_rows,
+        _pf_provenance,
+        "exact posterior: Dirichlet prior, von Mises heading noise, tempered SMC",
+        point_fit=False,
+    ),
+    Method.PAPER: Estimator(
+        _paper_rows, _paper_provenance, "the paper's particle filter as published", point_fit=False
+    ),
+    Method.NNLS: Estimator(_fit_rows(nnls_weights), _none, "non-negative least squares", point_fit=True),
+    Method.ARBITRATION: Estimator(
+        _fit_rows(arbitration_weights), _none, "best single behaviour per BAC", point_fit=True
+    ),
 }
+
+#: the methods that fit one point, in :class:`Method` order (the baselines ``evaluate`` scores)
+POINT_FITS: tuple[Method, ...] = tuple(m for m in Method if REGISTRY[m].point_fit)
+
+
+def is_point_fit(name: object) -> bool:
+    """Whether the method a table names (its ``estimated_by.method``) fits one point; False for a
+    name no method has (a hand-written table may say anything)."""
+    return any(name == m.value for m in POINT_FITS)
 
 
 def method_of(value: Method | str) -> Method:

@@ -1,7 +1,7 @@
 """``estimate``: from segmented demos to a fusion table (paper Sections IV-B and IV-C).
 
 One demo's rows are :mod:`lfdfuse.estimate.segments` (every goal segment and BAC in one pass of
-the method); several demos pooled, :mod:`lfdfuse.estimate.pooled`. This module checks the demos,
+the method); several demos pooled, :mod:`lfdfuse.estimate.pooled_estimate`. This module checks the demos,
 names the network and writes the provenance. Reading the log and refining the table with
 sub-goals are the caller's (:mod:`lfdfuse.learn`).
 """
@@ -12,10 +12,10 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from lfdfuse.errors import ConfigError
+from lfdfuse.estimate.demo_alignment import same_behaviors
 from lfdfuse.estimate.methods import EstimateOptions, Method, estimate_group, estimate_groups, provenance
 from lfdfuse.estimate.model import CommandBins
-from lfdfuse.estimate.pool import same_behaviors
-from lfdfuse.estimate.pooled import estimate_pooled
+from lfdfuse.estimate.pooled_estimate import estimate_pooled
 from lfdfuse.estimate.segments import groups_of
 from lfdfuse.network.table import FusionTable, Network, default_weights_for
 from lfdfuse.progress import Progress

@@ -6,7 +6,7 @@ and the weights of the applicable behaviours are estimated with the chosen metho
 goal (a trailing part with no goal reached becomes a step with goal null). ``pf`` samples every group of the run (and the default-weight fits) in one batched
 tempered SMC pass (:mod:`lfdfuse.estimate.smc`) — ``--trials K`` included. A group with one
 applicable behaviour gets weight 1; a group with no informative step is skipped (its BAC falls
-back to the default weights). Several demos pooled: :mod:`lfdfuse.estimate.pooled`.
+back to the default weights). Several demos pooled: :mod:`lfdfuse.estimate.pooled_estimate`.
 """
 
 from __future__ import annotations

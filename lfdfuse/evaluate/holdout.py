@@ -34,8 +34,9 @@ import numpy as np
 
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.commands import commands_of
+from lfdfuse.estimate.methods import POINT_FITS
 from lfdfuse.estimate.model import CommandBins
-from lfdfuse.estimate.pipeline import EstimateOptions, Method, estimate_run
+from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
 from lfdfuse.estimate.replay import fused_vectors
 from lfdfuse.network.table import FusionTable
 from lfdfuse.progress import Progress
@@ -43,7 +44,9 @@ from lfdfuse.progress import part as share
 from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.segment.read import SegmentedRun
 
-METHODS: tuple[str, ...] = ("fused", "nnls", "arbitration", "straight", "previous", "oracle")
+#: what is scored: the default estimator, the point-fit methods (the baselines), then predictors
+#: that fit nothing, and the oracle
+METHODS: tuple[str, ...] = ("fused", *(m.value for m in POINT_FITS), "straight", "previous", "oracle")
 
 
 @dataclass(frozen=True)
@@ -187,8 +190,8 @@ def evaluate(
     demo = np.arctan2(test.demo[test_steps, 1], test.demo[test_steps, 0])
     offset = int(test.segment_of[0]) if len(test.segment_of) else 0
     predictions: dict[str, np.ndarray] = {}
-    fits = [("fused", train, base), ("nnls", train, replace(base, method=Method.NNLS))]
-    fits += [("arbitration", train, replace(base, method=Method.ARBITRATION)), ("oracle", test, base)]
+    fits = [("fused", train, base), *((m.value, train, replace(base, method=m)) for m in POINT_FITS)]
+    fits.append(("oracle", test, base))
     decided = np.zeros(0, dtype=np.int64) if cm.decisions is None else np.nonzero(cm.decisions[cut:])[0]
     chosen: dict[str, np.ndarray] = {}
     for k, (name, part, eo) in enumerate(fits):

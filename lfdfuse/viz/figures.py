@@ -17,7 +17,7 @@ from matplotlib.collections import LineCollection
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch, Polygon
 
-from lfdfuse.evaluate.views import PathData
+from lfdfuse.evaluate.plot_data import PathData
 from lfdfuse.network.table import StepRows
 from lfdfuse.viz import colors
 from lfdfuse.world.model import World

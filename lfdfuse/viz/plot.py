@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 from matplotlib.legend import Legend
 
 from lfdfuse.errors import ConfigError, LfdError
-from lfdfuse.evaluate.views import PathData, load_log
+from lfdfuse.evaluate.plot_data import PathData, load_log
 from lfdfuse.files import write_bytes_atomic
 from lfdfuse.network.table import FusionTable, load_table, table_steps
 from lfdfuse.viz import figures

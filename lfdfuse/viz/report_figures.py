@@ -14,7 +14,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from lfdfuse.evaluate.paper.records import STYLES, PaperResults, passing_sides, task_order
-from lfdfuse.evaluate.views import load_log
+from lfdfuse.evaluate.plot_data import load_log
 from lfdfuse.network.table import table_steps
 from lfdfuse.viz import colors, figures
 from lfdfuse.viz.plot import DPI, map_figure, table_figure

@@ -14,14 +14,14 @@ from lfdfuse import learn
 from lfdfuse.estimate.approach import HOMING_RAD, Approach, approach_run, homing_begins, spread
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.estimate.subgoals import refine, track_of
-from lfdfuse.evaluate.generated import THREE_GOALS
 from lfdfuse.execute.check import demo_world, rollout
 from lfdfuse.execute.repair import Amends
 from lfdfuse.log.reader import read_run
 from lfdfuse.network.table import FusionRow, Step
 from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.segment.read import SegmentedRun, read_segmented
-from lfdfuse.world.generate import generate_offroute
+from tests.support.generated import THREE_GOALS
+from tests.support.generated_worlds import generate_offroute
 
 NAMES = ("avoid", "attract_red", "wander", "wall_attract_left")
 N = 200

@@ -10,7 +10,7 @@ import pytest
 from typer.testing import CliRunner
 
 from lfdfuse.cli.main import app
-from lfdfuse.estimate.pool import align
+from lfdfuse.estimate.demo_alignment import align
 from lfdfuse.evaluate.holdout import _wrap, predict
 from lfdfuse.learn import demonstrate, learn
 from lfdfuse.log import LogWriter, lfd

@@ -10,7 +10,7 @@ import pytest
 from lfdfuse.evaluate.paper.cells import LearnCell, RelearnCell, RunCell
 from lfdfuse.evaluate.paper.suite import PaperOptions, plan_cells
 from lfdfuse.parallel.jobs import critical_path_order
-from lfdfuse.tools.bench_parallel import list_schedule_s
+from tests.bench.parallel import list_schedule_s
 
 
 def _makespan(costs: tuple[float, ...], after: tuple[tuple[int, ...], ...], order: list[int]) -> float:

@@ -1,6 +1,6 @@
 """Issue 21: where a learned table fails, one scripted correction and a re-estimate fix it.
 
-The ring-spur task learned without sub-goals (:mod:`lfdfuse.evaluate.offroute`: seed 1 demo,
+The ring-spur task learned without sub-goals (:mod:`tests.support.offroute`: seed 1 demo,
 seed 0 estimate) reaches red and green, then shuttles in the dead-end spur after green and never
 reaches blue. A person takes over once from the teacher's start (``teleop --table --input script
 --script tests/sources/teleop/ring-spur-fix.yaml``), drives out of the spur toward blue and hands
@@ -29,12 +29,12 @@ from lfdfuse.cli.main import app
 from lfdfuse.estimate.paper import PFParams
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.estimate.smc import SMCParams
-from lfdfuse.evaluate.offroute import CASES, demonstrate, perturbed_starts, run_starts
 from lfdfuse.learn import LearnOptions, learn
 from lfdfuse.network.table import FusionTable, dump_table, load_table, named_leaf_steps
 from lfdfuse.segment.read import network_ticks, read_segmented
 from lfdfuse.world.model import load_world
 from tests.conftest import ROOT
+from tests.support.offroute import CASES, demonstrate, perturbed_starts, run_starts
 
 FIX_SCRIPT = ROOT / "tests" / "sources" / "teleop" / "ring-spur-fix.yaml"
 

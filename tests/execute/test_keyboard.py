@@ -12,7 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from lfdfuse.sources.tasks import Leg, load_task
-from lfdfuse.tools.bench_keys import (
+from tests.bench.keys import (
     STYLE_BEHAVIORS,
     TASK,
     learn,

@@ -23,8 +23,6 @@ from lfdfuse.behaviors.landmarks import OpeningParams, OpeningSensor, opening_on
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.estimate.subgoals import refine, track_of
-from lfdfuse.evaluate.generated import THREE_GOALS, TIME_FACTOR
-from lfdfuse.evaluate.offroute import CASES, demonstrate, learn_case, perturbed_starts, run_starts
 from lfdfuse.log.reader import read_run
 from lfdfuse.network.driver import NetworkDriver
 from lfdfuse.network.landmarks import Ahead, Cues, Landmark, Progress
@@ -36,9 +34,11 @@ from lfdfuse.sim.loop import run as sim_run
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sim.sensors import LaserParams, SensorParams
 from lfdfuse.sim.simulator import Observation, Simulator
-from lfdfuse.world.generate import generate_offroute
 from lfdfuse.world.model import load_world
 from tests.conftest import ROOT
+from tests.support.generated import THREE_GOALS, TIME_FACTOR
+from tests.support.generated_worlds import generate_offroute
+from tests.support.offroute import CASES, demonstrate, learn_case, perturbed_starts, run_starts
 
 SCHEMA = json.loads((ROOT / "schemas" / "fusion-table.schema.json").read_text())
 

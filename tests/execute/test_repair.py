@@ -15,7 +15,6 @@ from lfdfuse import learn
 from lfdfuse.behaviors.landmarks import OpeningParams
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.estimate.subgoals import refine, track_of
-from lfdfuse.evaluate.generated import THREE_GOALS
 from lfdfuse.execute.check import Check, demo_world, rollout, score
 from lfdfuse.execute.repair import (
     BLAME_STEPS,
@@ -33,7 +32,8 @@ from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
 from lfdfuse.segment.read import read_segmented
 from lfdfuse.segment.track import LandmarkTrack, OpeningCue
 from lfdfuse.sim.sensors import ScanGeometry
-from lfdfuse.world.generate import generate_offroute
+from tests.support.generated import THREE_GOALS
+from tests.support.generated_worlds import generate_offroute
 
 GEOM = ScanGeometry(-math.pi / 2, math.pi / 2, 3, 8.0)
 

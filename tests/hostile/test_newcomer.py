@@ -15,10 +15,10 @@ from lfdfuse.cli.main import app
 from lfdfuse.cli.render import bac_names
 from lfdfuse.errors import ConfigError, WorldError
 from lfdfuse.files import MAX_YAML_DEPTH, parse_yaml
-from lfdfuse.tools.demo_check import problems
 from lfdfuse.validate import validate
 from lfdfuse.world.model import parse_world
 from tests.hostile.base import TABLE_YAML
+from tests.support.demo_check import problems
 
 runner = CliRunner()
 

@@ -135,7 +135,7 @@ def test_sample_logs_are_what_the_code_generates(tmp_path: Path) -> None:
     and the runs did not drift apart); byte-identical output from the same
     environment is :func:`test_same_seed_gives_byte_identical_files`'s. Metadata and attachments
     match exactly."""
-    from lfdfuse.tools.samples import generate
+    from tests.support.samples import generate
 
     for made in generate(tmp_path):
         shipped = ROOT / "sample_logs" / made.name

@@ -16,7 +16,7 @@ from typer.testing import CliRunner
 
 from lfdfuse.cli.main import app
 from lfdfuse.estimate.pipeline import EstimateOptions
-from lfdfuse.evaluate.views import load_log
+from lfdfuse.evaluate.plot_data import load_log
 from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.learn import LearnOptions, demonstrate, learn
 from lfdfuse.log import lfd

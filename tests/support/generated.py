@@ -1,11 +1,11 @@
 """Sub-goals that carry (issue 21): the three-goal task in generated off-route worlds.
 
-In every world of :mod:`lfdfuse.world.generate` (a corridor ring, green at the end of a dead-end
+In every world of :mod:`tests.support.generated_worlds` (a corridor ring, green at the end of a dead-end
 spur, side openings on the way) the scripted teacher demonstrates the paper's three-goal task
 once; the demo is learned without sub-goals and with them (one table per variant of the
 decision parameters), and every table runs from perturbed starts (±0.5 m, ±20°, as ``execute
 --starts`` draws them). :func:`completion` sums a set of worlds up. The ``generated`` bench
-(:mod:`lfdfuse.tools.bench_generated`) reports the held-apart seeds; landmarks are tuned on the
+(:mod:`tests.bench.generated`) reports the held-apart seeds; landmarks are tuned on the
 tuning seeds only.
 """
 
@@ -21,7 +21,6 @@ import numpy as np
 from lfdfuse import learn
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.estimate.subgoals import refine, track_of
-from lfdfuse.evaluate.offroute import OffRouteCase, run_starts
 from lfdfuse.execute.check import CHECK_STARTS
 from lfdfuse.execute.starts import perturbed_starts, wilson_interval
 from lfdfuse.log.reader import read_run
@@ -30,7 +29,8 @@ from lfdfuse.segment.decisions import DecisionParams
 from lfdfuse.segment.read import SegmentedRun, read_segmented
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sources.tasks import Leg
-from lfdfuse.world.generate import generate_offroute
+from tests.support.generated_worlds import generate_offroute
+from tests.support.offroute import OffRouteCase, run_starts
 
 #: the paper's three-goal task (``sample_logs/three-goals.task.yaml``), demonstrated in every generated world
 THREE_GOALS = (Leg("red", "keep-left"), Leg("green", "keep-center"), Leg("blue", "keep-right"))

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from lfdfuse.evaluate.generated import completion, run_generated
-from lfdfuse.world.generate import HELD_APART_SEEDS
+from tests.support.generated import completion, run_generated
+from tests.support.generated_worlds import HELD_APART_SEEDS
 
 #: held-apart worlds, never tuned on: green at the end of a spur off the 2nd right opening after
 #: red (1022), off the 1st left one (1025)

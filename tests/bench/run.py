@@ -6,7 +6,7 @@ Suites: ``pipeline`` (each stage's speed beside a baseline measured in the same 
 (round-trip quality against hand-written truth tables, and the cost of estimating). Ratios to
 an in-run baseline are what to compare across machines.
 
-    python -m lfdfuse.tools.bench --out build/bench.json [--suite world] [--quick]
+    python -m tests.bench.run --out build/bench.json [--suite world] [--quick]
 """
 
 from __future__ import annotations
@@ -23,15 +23,15 @@ from rich.console import Console
 from rich.table import Table
 
 SUITES = {
-    "pipeline": "lfdfuse.tools.bench_pipeline",
-    "world": "lfdfuse.tools.bench_world",
-    "estimate": "lfdfuse.tools.bench_estimate",
-    "offroute": "lfdfuse.tools.bench_offroute",
-    "generated": "lfdfuse.tools.bench_generated",
-    "memory": "lfdfuse.tools.bench_memory",
-    "drive": "lfdfuse.tools.bench_drive",
-    "keys": "lfdfuse.tools.bench_keys",
-    "parallel": "lfdfuse.tools.bench_parallel",
+    "pipeline": "tests.bench.pipeline",
+    "world": "tests.bench.world",
+    "estimate": "tests.bench.estimate",
+    "offroute": "tests.bench.offroute",
+    "generated": "tests.bench.generated",
+    "memory": "tests.bench.memory",
+    "drive": "tests.bench.drive",
+    "keys": "tests.bench.keys",
+    "parallel": "tests.bench.parallel",
 }
 
 app = typer.Typer(add_completion=False, pretty_exceptions_enable=False)

@@ -11,7 +11,7 @@ the default (``auto``) command model, and the learned table drives the robot:
 
 Each row also gives the scripted teacher's result (no keys) for the same cell as the baseline.
 
-    python -m lfdfuse.tools.bench --suite keys
+    python -m tests.bench.run --suite keys
 """
 
 from __future__ import annotations

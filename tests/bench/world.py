@@ -13,7 +13,7 @@ Each row has a rate beside a baseline measured in the same run, and their ratio:
 The real maps are read from ``../shared/realdata/maps`` beside the checkout (or
 ``$LFDFUSE_SHARED``); without them those rows are left out.
 
-    python -m lfdfuse.tools.bench_world [--quick]
+    python -m tests.bench.world [--quick]
 """
 
 from __future__ import annotations
@@ -29,9 +29,9 @@ import numpy as np
 
 from lfdfuse.sim.sensors import LaserParams
 from lfdfuse.sources.planner import Planner, PlannerParams
-from lfdfuse.tools.bench_pipeline import box_map, rate
 from lfdfuse.world.model import World, load_world
 from lfdfuse.world.raycast import RayCaster, _point_segment_distance, intersect
+from tests.bench.pipeline import box_map, rate
 
 Row = dict[str, object]
 

@@ -14,12 +14,13 @@ Seeds are split once and for all (:data:`TUNING_SEEDS`, :data:`HELD_APART_SEEDS`
 are developed on the first range, and completion is reported on the second, never tuned on.
 
 :func:`offroute_world` turns a spec into world data (the mapping a world YAML holds);
-:func:`generate_offroute` parses it into a :class:`World`. ``python -m lfdfuse.world.generate
+:func:`generate_offroute` parses it into a :class:`World`. ``python -m tests.support.generated_worlds
 SEED`` prints a world's YAML (``lfdfuse simulate --world`` reads it from a file).
 """
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 from typing import Any
 
@@ -221,3 +222,16 @@ def generate_offroute(seed: int) -> World:
     data = offroute_world(offroute_spec(seed))
     text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=200)
     return parse_world(data, source=text, origin=data["name"])
+
+
+def main(argv: list[str]) -> int:
+    """Print the world of ``SEED`` as YAML, to look at or to hand to ``lfdfuse simulate --world``."""
+    if len(argv) != 1 or not argv[0].isdigit():
+        print("usage: python -m tests.support.generated_worlds SEED", file=sys.stderr)
+        return 1
+    print(generate_offroute(int(argv[0])).source, end="")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main(sys.argv[1:]))

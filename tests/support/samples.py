@@ -1,6 +1,6 @@
 """Regenerate ``sample_logs/``: small demonstration logs made by code in this repo.
 
-``python -m lfdfuse.tools.samples sample_logs`` (``make sample-logs``) rewrites every file; same code,
+``python -m tests.support.samples sample_logs`` (``make sample-logs``) rewrites every file; same code,
 same bytes.
 """
 

@@ -9,7 +9,7 @@ per robot: ticks, latency p50 / p99 / max (ms), whether p99 meets the goal (< 10
 CPU time drive's thread spent over the same spans (p50 / p99) with the machine's load average:
 on a loaded machine the wall-clock tail is time spent waiting for a core, not work.
 
-    python -m lfdfuse.tools.bench --suite drive [--quick]
+    python -m tests.bench.run --suite drive [--quick]
 """
 
 from __future__ import annotations

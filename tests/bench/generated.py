@@ -1,9 +1,9 @@
 """Sub-goals that carry (issue 21): the three-goal task in generated off-route worlds held apart.
 
-The first 20 worlds of :data:`~lfdfuse.world.generate.BENCH_SEEDS` (4 with ``--quick``) — a
+The first 20 worlds of :data:`~tests.support.generated_worlds.BENCH_SEEDS` (4 with ``--quick``) — a
 corridor ring, green at the end of a dead-end spur off it, side openings on the way, never tuned
 on nor looked at — each demonstrated once by the scripted teacher and learned without and with
-sub-goals (:mod:`lfdfuse.evaluate.generated`); each table runs from 3 perturbed starts (±0.5 m,
+sub-goals (:mod:`tests.support.generated`); each table runs from 3 perturbed starts (±0.5 m,
 ±20°) and may take 1.5 times the teacher's time. One row per world (runs completed in order
 without collision, out of 3, per variant; the sub-goal landmarks; the step each failed run with
 sub-goals ended in), then one row per variant over the set with its Wilson 95 % interval and the
@@ -19,7 +19,7 @@ Stop 29 (junction decisions, the drive-on rule), on seeds never run before: 91/1
 and 78/120 on 1220-1259 (the code before: 82 and 66; without sub-goals 63 and 45); on this
 bench's 1160-1179, 50/60 as before (1164 lost two runs, 1172 and 1179 won one each).
 
-    python -m lfdfuse.tools.bench --suite generated
+    python -m tests.bench.run --suite generated
 """
 
 from __future__ import annotations
@@ -30,8 +30,8 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
-from lfdfuse.evaluate.generated import GeneratedOutcome, completion, run_generated
-from lfdfuse.world.generate import BENCH_SEEDS, offroute_spec
+from tests.support.generated import GeneratedOutcome, completion, run_generated
+from tests.support.generated_worlds import BENCH_SEEDS, offroute_spec
 
 VARIANTS = ("reactive", "subgoals")
 
@@ -85,7 +85,7 @@ def run(
 
 
 if __name__ == "__main__":
-    from lfdfuse.world.generate import TUNING_SEEDS
+    from tests.support.generated_worlds import TUNING_SEEDS
 
     tuning = "--tuning" in sys.argv
     for row in run(

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from lfdfuse.evaluate.generated import GeneratedOutcome
-from lfdfuse.tools.bench_generated import summary_rows, world_row
+from tests.bench.generated import summary_rows, world_row
+from tests.support.generated import GeneratedOutcome
 
 
 def _outcome(

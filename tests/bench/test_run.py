@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from rich.console import Console
 
-from lfdfuse.tools.bench import render
+from tests.bench.run import render
 
 
 def test_a_wide_suite_is_summarised_whole_at_80_columns() -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse.tools.bench_parallel import chain_s, list_schedule_s
+from tests.bench.parallel import chain_s, list_schedule_s
 
 
 def test_equal_independent_jobs_fill_the_workers_in_rounds() -> None:

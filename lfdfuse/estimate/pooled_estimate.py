@@ -2,7 +2,7 @@
 and default fit the other demos add steps to, estimated again on the pooled steps.
 
 Which steps pool where — demos aligned by their goals, (step, BAC) groups across them, each
-demo's command model — is :mod:`lfdfuse.estimate.pool`; one demo's pass is
+demo's command model — is :mod:`lfdfuse.estimate.demo_alignment`; one demo's pass is
 :mod:`lfdfuse.estimate.segments`.
 """
 
@@ -16,9 +16,7 @@ import numpy as np
 
 from lfdfuse.estimate.baselines import angle_errors
 from lfdfuse.estimate.commands import Commands, commands_of
-from lfdfuse.estimate.methods import EstimateOptions, RowEstimate, check_options, estimate_groups
-from lfdfuse.estimate.model import CommandBins
-from lfdfuse.estimate.pool import (
+from lfdfuse.estimate.demo_alignment import (
     DEFAULT,
     ROW,
     Alignment,
@@ -28,6 +26,8 @@ from lfdfuse.estimate.pool import (
     problem_of,
     row_rng,
 )
+from lfdfuse.estimate.methods import EstimateOptions, RowEstimate, check_options, estimate_groups
+from lfdfuse.estimate.model import CommandBins
 from lfdfuse.estimate.segments import estimate_segments, run_rng, step_names
 from lfdfuse.network.table import FusionRow, Step
 from lfdfuse.progress import Progress, part, tell
@@ -36,7 +36,7 @@ from lfdfuse.segment.read import SegmentedRun
 
 @dataclass(frozen=True)
 class PooledSteps:
-    """The network steps of one or more demos (:mod:`lfdfuse.estimate.pool`) and what it took."""
+    """The network steps of one or more demos (:mod:`lfdfuse.estimate.demo_alignment`) and what it took."""
 
     steps: tuple[Step, ...]
     default_weights: dict[str, float] | None  # the table's default fit, None: too few steps
@@ -103,11 +103,11 @@ def estimate_pooled(
     progress: Progress | None = None,
     command_set: CommandBins | None = None,
 ) -> PooledSteps:
-    """Estimate the rows of one or more demos pooled (:mod:`lfdfuse.estimate.pool`).
+    """Estimate the rows of one or more demos pooled (:mod:`lfdfuse.estimate.demo_alignment`).
 
     The first demo is estimated as it would be alone (:func:`estimate_segments`, one pass); a
     row or default fit the other demos add steps to is estimated again on the pooled steps, on its
-    own random stream (:func:`~lfdfuse.estimate.pool.row_rng`), and carries ``samples_added`` and
+    own random stream (:func:`~lfdfuse.estimate.demo_alignment.row_rng`), and carries ``samples_added`` and
     ``weights_before`` (the first demo's alone). So one demo gives the table it always gave, and
     a row no further demo touched comes out bit-identical to the first demo's. ``command_set``:
     the discrete model's command set, when not the first demo's own.

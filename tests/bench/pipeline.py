@@ -1,7 +1,7 @@
 """Pipeline benchmarks: speed of every stage, each beside a baseline measured in the same run.
 
 Ratios to the in-run baseline are what to compare across machines; absolute rates depend on a
-shared, noisy machine. :mod:`lfdfuse.tools.bench` runs these with the other suites.
+shared, noisy machine. :mod:`tests.bench.run` runs these with the other suites.
 """
 
 from __future__ import annotations

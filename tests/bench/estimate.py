@@ -6,7 +6,7 @@ filter beside it), and report per row: samples, truth, estimate, least-squares h
 Cramér–Rao bound on L1, and per demo the held-out heading error over the truth's noise floor and
 the ratio of estimating time to simulating time (both measured in this run).
 
-``run(quick)`` returns the rows of the printed table; ``python -m lfdfuse.tools.bench_estimate``
+``run(quick)`` returns the rows of the printed table; ``python -m tests.bench.estimate``
 prints it.
 """
 

@@ -8,7 +8,10 @@ from pathlib import Path
 
 import yaml
 
-from lfdfuse.world.generate import (
+from lfdfuse.world.model import load_world
+from lfdfuse.world.parse import parse_world
+from tests.conftest import ROOT
+from tests.support.generated_worlds import (
     HELD_APART_SEEDS,
     TUNING_SEEDS,
     generate_offroute,
@@ -16,8 +19,6 @@ from lfdfuse.world.generate import (
     offroute_spec,
     offroute_world,
 )
-from lfdfuse.world.model import load_world
-from lfdfuse.world.parse import parse_world
 
 SAMPLE = [*range(0, 40), *range(1000, 1040)]
 
@@ -68,7 +69,8 @@ def test_the_parameters_vary_over_the_seeds() -> None:
 
 def test_a_generated_world_prints_as_a_world_file_simulate_takes(tmp_path: Path) -> None:
     out = subprocess.run(
-        [sys.executable, "-m", "lfdfuse.tools.generated_world", "1003"],
+        [sys.executable, "-m", "tests.support.generated_worlds", "1003"],
+        cwd=ROOT,
         capture_output=True,
         text=True,
         check=True,
@@ -78,6 +80,9 @@ def test_a_generated_world_prints_as_a_world_file_simulate_takes(tmp_path: Path)
     world, want = load_world(str(path)), generate_offroute(1003)
     assert world.walls == want.walls and world.targets == want.targets and world.start == want.start
     bad = subprocess.run(
-        [sys.executable, "-m", "lfdfuse.tools.generated_world", "x"], capture_output=True, text=True
+        [sys.executable, "-m", "tests.support.generated_worlds", "x"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
     )
     assert bad.returncode == 1 and bad.stderr.count("\n") == 1

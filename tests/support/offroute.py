@@ -4,7 +4,7 @@ On buildings whose second target sits in a dead-end spur or an office off the ri
 camera view from the route, a scripted teacher demonstrates the task once (:func:`demonstrate`);
 the demo is learned with or without sub-goals at decision points (:func:`learn_case`); the
 learned table then runs from the teacher's start and from starts perturbed by up to ±0.5 m and
-±20° (:func:`run_starts`). The ``offroute`` bench (:mod:`lfdfuse.tools.bench_offroute`) and the
+±20° (:func:`run_starts`). The ``offroute`` bench (:mod:`tests.bench.offroute`) and the
 tests compose these.
 """
 

@@ -1,10 +1,10 @@
-"""Goals off the style's route (issue 15): the full table of :mod:`lfdfuse.evaluate.offroute`.
+"""Goals off the style's route (issue 15): the full table of :mod:`tests.support.offroute`.
 
 Two buildings, the teacher's start and 10 perturbed starts (3 with ``--quick``), with and
 without sub-goals, and the ring-spur task run in a larger building of the same topology. One row
 per (world, method, start): completed in order, collisions, time.
 
-    python -m lfdfuse.tools.bench --suite offroute
+    python -m tests.bench.run --suite offroute
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from lfdfuse.evaluate.offroute import CASES, demonstrate, learn_case, perturbed_starts, run_starts
 from lfdfuse.world.model import load_world
+from tests.support.offroute import CASES, demonstrate, learn_case, perturbed_starts, run_starts
 
 
 def run(quick: bool = False) -> list[dict[str, Any]]:

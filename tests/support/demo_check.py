@@ -1,4 +1,4 @@
-"""``python -m lfdfuse.tools.demo_check``: did ``make demo`` learn? Exit 1 when learning clearly failed.
+"""``python -m tests.support.demo_check``: did ``make demo`` learn? Exit 1 when learning clearly failed.
 
 Compares each learned run's report with what its teacher showed: the keep-left run must keep
 its left wall nearer than its right (the teacher's style) without collisions; the task run must
