@@ -42,8 +42,9 @@ lint: install
 	$(VENV)/bin/ruff check lfdfuse tests
 	$(VENV)/bin/mypy
 
+# every suite (tests/bench); one, shorter: make bench BENCH_ARGS='--suite world --quick'
 bench: install
-	$(PY) -m tests.bench.run --out build/bench.json
+	$(PY) -m tests.bench.run --out build/bench.json $(BENCH_ARGS)
 
 sample-logs: install
 	$(PY) -m tests.support.samples sample_logs

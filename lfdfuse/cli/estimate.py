@@ -31,7 +31,7 @@ def estimate_cmd(
         Method.PF,
         "--method",
         "-m",
-        help="; ".join(f"{m.value}: {REGISTRY[m].label}" for m in Method) + ".",
+        help=", ".join(f"{m.value} ({REGISTRY[m].label})" for m in Method) + ".",
     ),
     particles: int = typer.Option(
         SMCParams().particles,
