@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from lfdfuse.behaviors.primitives import ATTRACT
+from lfdfuse.behaviors.catalogue import needs
 from lfdfuse.control.drive import command_to_heading
 from lfdfuse.drive.decode import LiveOdom, LiveScan, LiveTargets, LiveTf, LiveTwist
 from lfdfuse.drive.frames import BASE_FRAMES, ScanFrame, TfTree
@@ -53,12 +53,10 @@ class Applicability:
 
 
 def missing_input(name: str, inputs: Inputs) -> str:
-    """'' when the robot can compute behaviour ``name``, else the input it lacks."""
-    if name.startswith(ATTRACT) and not inputs.camera:
-        return "camera"
-    if name == "sonar_avoid" and not inputs.sonar:
-        return "sonar"
-    return ""
+    """'' when the robot can compute behaviour ``name``, else the input it lacks (from the
+    catalogue's inputs of the behaviour; a live robot always has its laser and odometry)."""
+    have = {"laser": True, "odometry": True, "camera": inputs.camera, "sonar": inputs.sonar}
+    return next((need for need in sorted(needs(name)) if not have[need]), "")
 
 
 def applicability(table: FusionTable, inputs: Inputs) -> Applicability:
