@@ -16,7 +16,7 @@ from lfdfuse.behaviors import catalogue
 from lfdfuse.behaviors.spec import attract_target
 from lfdfuse.errors import ConfigError
 from lfdfuse.files import read_yaml, write_text_atomic
-from lfdfuse.network.landmarks import Landmark
+from lfdfuse.network.landmark_goals import Landmark
 from lfdfuse.validate import integer, number
 
 FORMAT = "lfdfuse/fusion-table@1"
