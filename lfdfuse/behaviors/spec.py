@@ -198,12 +198,14 @@ class Scan:
     def valid(self) -> np.ndarray:
         """``(N, B)`` returns that count (finite, positive, below max range, own bearing)."""
         r = self.r
-        return np.isfinite(r) & (r > 0.0) & (r < self.obs.geometry.max_range_m) & self.own[None, :]
+        return np.asarray(
+            np.isfinite(r) & (r > 0.0) & (r < self.obs.geometry.max_range_m) & self.own[None, :]
+        )
 
     @cached_property
     def near(self) -> np.ndarray:
         """``(N, B)`` returns nearer than ``d_max``."""
-        return self.valid & (self.r < self.params.d_max_m)
+        return np.asarray(self.valid & (self.r < self.params.d_max_m))
 
     @cached_property
     def rn(self) -> np.ndarray:
@@ -219,24 +221,24 @@ class Scan:
     @cached_property
     def front(self) -> np.ndarray:
         """``(B,)`` beams in the front half."""
-        return (np.abs(self.ang) <= math.pi / 2 + 1e-9) & self.own
+        return np.asarray((np.abs(self.ang) <= math.pi / 2 + 1e-9) & self.own)
 
     @cached_property
     def left(self) -> np.ndarray:
         """``(B,)`` beams from straight ahead to ``side_sector_rad`` to the left."""
         a = self.ang
-        return (a >= -1e-9) & (a <= self.params.side_sector_rad + 1e-9) & self.own
+        return np.asarray((a >= -1e-9) & (a <= self.params.side_sector_rad + 1e-9) & self.own)
 
     @cached_property
     def right(self) -> np.ndarray:
         """``(B,)`` beams from straight ahead to ``side_sector_rad`` to the right."""
         a = self.ang
-        return (a <= 1e-9) & (a >= -self.params.side_sector_rad - 1e-9) & self.own
+        return np.asarray((a <= 1e-9) & (a >= -self.params.side_sector_rad - 1e-9) & self.own)
 
     @cached_property
     def cone(self) -> np.ndarray:
         """``(B,)`` beams in the front cone of ``front_cone_rad``."""
-        return (np.abs(self.ang) <= self.params.front_cone_rad / 2 + 1e-9) & self.own
+        return np.asarray((np.abs(self.ang) <= self.params.front_cone_rad / 2 + 1e-9) & self.own)
 
 
 @dataclass(frozen=True)
