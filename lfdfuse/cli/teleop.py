@@ -40,7 +40,7 @@ from lfdfuse.cli.render import print_report, print_run
 from lfdfuse.errors import ConfigError
 from lfdfuse.execute.correct import correct, correction_driver
 from lfdfuse.execute.report import write_report
-from lfdfuse.network.driver import NetworkDriver
+from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.network.table import load_table
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sim.sensors import ScanGeometry
@@ -249,7 +249,7 @@ def layout_path() -> Path:
     return Path(str(resources.files("lfdfuse") / LAYOUT))
 
 
-def _network_status(session: TeleopSession, driver: NetworkDriver) -> str:
+def _network_status(session: TeleopSession, driver: NetworkStepper) -> str:
     """Who drives, the network's step, and its request for help when it has one."""
     dec = driver.last
     step = "-" if dec is None or dec.step is None else dec.step.name

@@ -3,7 +3,7 @@
 No socket and no clock: the session calls :meth:`DriveCore.scan` with the wall time the scan
 arrived, and the core answers with a :class:`Tick` (the command to send, clamped, and why) or
 a :class:`Skip`. The network itself is the one ``execute`` runs
-(:class:`~lfdfuse.network.driver.NetworkDriver`: the same behaviours, runtime, vector →
+(:class:`~lfdfuse.network.stepper.NetworkStepper`: the same behaviours, runtime, vector →
 command mapping and safety reflex), fed an :class:`~lfdfuse.sim.simulator.Observation` built
 from the robot's own sensing: the scan in the base frame, odometry for the landmark cues
 (increments only), a camera's detections when the robot has one, no sonar.
@@ -16,13 +16,13 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from lfdfuse.behaviors.primitives import ATTRACT
+from lfdfuse.behaviors.catalogue import needs
 from lfdfuse.control.drive import command_to_heading
 from lfdfuse.drive.decode import LiveOdom, LiveScan, LiveTargets, LiveTf, LiveTwist
 from lfdfuse.drive.frames import BASE_FRAMES, ScanFrame, TfTree
 from lfdfuse.drive.safety import Limits, Watchdog
 from lfdfuse.errors import ConfigError
-from lfdfuse.network.driver import NetworkDriver
+from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.network.table import FusionTable, Network
 from lfdfuse.sim.robot import Pose, RobotParams
 from lfdfuse.sim.sensors import Reading, SensorParams
@@ -53,12 +53,10 @@ class Applicability:
 
 
 def missing_input(name: str, inputs: Inputs) -> str:
-    """'' when the robot can compute behaviour ``name``, else the input it lacks."""
-    if name.startswith(ATTRACT) and not inputs.camera:
-        return "camera"
-    if name == "sonar_avoid" and not inputs.sonar:
-        return "sonar"
-    return ""
+    """'' when the robot can compute behaviour ``name``, else the input it lacks (from the
+    catalogue's inputs of the behaviour; a live robot always has its laser and odometry)."""
+    have = {"laser": True, "odometry": True, "camera": inputs.camera, "sonar": inputs.sonar}
+    return next((need for need in sorted(needs(name)) if not have[need]), "")
 
 
 def applicability(table: FusionTable, inputs: Inputs) -> Applicability:
@@ -151,7 +149,7 @@ class DriveCore:
         self.frame: ScanFrame | None = None
         self.mount: Mount | None = None
         self.mount_from = ""
-        self.driver: NetworkDriver | None = None
+        self.driver: NetworkStepper | None = None
         self.odom: LiveOdom | None = None
         self.targets: LiveTargets | None = None
         self.robot_cmd: tuple[float, float] | None = None
@@ -196,7 +194,7 @@ class DriveCore:
             found = (Mount(), f"unknown: no tf to {scan.frame!r}; assumed at the base, facing forward")
         self.mount, self.mount_from = found
         self.frame = ScanFrame.of(scan.record, self.mount)
-        self.driver = NetworkDriver(
+        self.driver = NetworkStepper(
             table=self.table,
             world=None,
             sensors=SensorParams(),

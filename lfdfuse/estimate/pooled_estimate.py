@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from lfdfuse.behaviors.spec import attract_target
 from lfdfuse.estimate.baselines import angle_errors
 from lfdfuse.estimate.commands import Commands, commands_of
 from lfdfuse.estimate.demo_alignment import (
@@ -71,7 +72,7 @@ def _default_parts(
     """The goal-free behaviours, and per default fit (the table's, then each step's) its parts or
     None: as :func:`_default_masks`, over the demos pooled (the counts are the pooled ones)."""
     names = runs[0].names
-    idx = [i for i, n in enumerate(names) if not n.startswith("attract_")]
+    idx = [i for i, n in enumerate(names) if attract_target(n) is None]
     bases = [
         r.informative & r.applicable[:, idx].any(axis=1) if idx else np.zeros_like(r.informative)
         for r in runs
@@ -207,7 +208,7 @@ def estimate_pooled(
         fit = {names[i]: round(float(x), 4) for i, x in zip(idx, e.weights, strict=True) if x >= 1e-4}
         fits.append(fit or None)
     tell(progress, total, total)
-    goals = [g[len("attract_") :] if g and g.startswith("attract_") else None for g in al.goals]
+    goals = [attract_target(g) if g else None for g in al.goals]
     steps = tuple(
         Step(nm, goal, tuple(rows[i]), None, fits[1 + i])
         for i, (nm, goal) in enumerate(zip(step_names(goals), goals, strict=True))

@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from lfdfuse.behaviors.spec import attract_target
 from lfdfuse.estimate.baselines import angle_errors
 from lfdfuse.estimate.commands import commands_of
 from lfdfuse.estimate.methods import EstimateOptions, Problem, check_options, estimate_groups
@@ -72,7 +73,7 @@ def _default_masks(
     table's) or of one goal segment (that step's). Too few steps: None (safe wandering for the
     table, the table's default for a step).
     """
-    idx = [i for i, n in enumerate(run.names) if not n.startswith("attract_")]
+    idx = [i for i, n in enumerate(run.names) if attract_target(n) is None]
     base = run.informative & run.applicable[:, idx].any(axis=1) if idx else np.zeros_like(run.informative)
     masks: list[np.ndarray | None] = []
     whole: list[np.ndarray | None] = [None] if table_default else []
@@ -178,9 +179,7 @@ def estimate_segments(
         }
         return out or None
 
-    goals = [
-        s.goal[len("attract_") :] if s.goal and s.goal.startswith("attract_") else None for s in run.segments
-    ]
+    goals = [attract_target(s.goal) if s.goal else None for s in run.segments]
     first = 1 if table_default else 0
     steps = tuple(
         Step(nm, goal, tuple(rows[s.index]), None, default(slot[first + i]))

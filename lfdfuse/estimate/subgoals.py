@@ -27,7 +27,7 @@ from lfdfuse.estimate.methods import EstimateOptions
 from lfdfuse.estimate.replay import fused_vectors
 from lfdfuse.estimate.segments import estimate_segments, run_rng
 from lfdfuse.log.reader import Run
-from lfdfuse.network.landmarks import Ahead, Landmark, OpeningCount
+from lfdfuse.network.landmark_goals import Ahead, Landmark, OpeningCount
 from lfdfuse.network.table import FusionTable, Network, Step
 from lfdfuse.progress import Progress, tell
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, find_decisions, split_segments

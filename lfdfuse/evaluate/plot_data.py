@@ -17,6 +17,7 @@ from typing import Literal
 import numpy as np
 import shapely
 
+from lfdfuse.behaviors.spec import attract_target
 from lfdfuse.errors import LfdError, LogError
 from lfdfuse.files import parse_yaml
 from lfdfuse.log import lfd
@@ -117,7 +118,7 @@ def contacts(
 def _goal_name(goal: str | None) -> str | None:
     if goal is None:
         return None
-    return goal[len("attract_") :] if goal.startswith("attract_") else goal
+    return attract_target(goal) or goal
 
 
 #: at most this many laser returns are kept for a plot (every k-th scan past it)

@@ -21,7 +21,7 @@ from lfdfuse.errors import LfdError
 from lfdfuse.execute.starts import perturbed_starts
 from lfdfuse.files import parse_yaml
 from lfdfuse.log.run import Run
-from lfdfuse.network.driver import NetworkDriver
+from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.network.table import FusionTable
 from lfdfuse.sim.loop import run
 from lfdfuse.sim.robot import Pose, RobotParams
@@ -138,7 +138,7 @@ def rollout(
 ) -> tuple[int, np.ndarray]:
     """Goals reached and poses ``(n, 3)`` of the table driven from ``start`` (noise-free sensing)."""
     rng = np.random.default_rng(seed)
-    drv = NetworkDriver(table=table, world=world, sensors=SensorParams(), rng=rng)
+    drv = NetworkStepper(table=table, world=world, sensors=SensorParams(), rng=rng)
     sim = Simulator(world, rng, SensorParams(), drv.robot)
     s = run(sim, drv, start=start, duration_s=max_time_s)
     return len(s.reached), s.poses

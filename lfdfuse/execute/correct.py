@@ -1,6 +1,6 @@
 """``teleop --table``: the learned network drives and a person corrects it (DESIGN §10).
 
-The network is execute's own :class:`~lfdfuse.network.driver.NetworkDriver`, handed to the
+The network is execute's own :class:`~lfdfuse.network.stepper.NetworkStepper`, handed to the
 teleop session as its ``network`` command source: the session asks it every period and decides
 who drives (:class:`~lfdfuse.sources.teleop.session.TeleopSession`), the one loop of
 :mod:`lfdfuse.sim.loop` runs, and :class:`~lfdfuse.execute.record.LfdRecorder` logs the network's
@@ -20,16 +20,16 @@ import numpy as np
 from lfdfuse.execute.record import LfdRecorder
 from lfdfuse.execute.report import network_report
 from lfdfuse.log.writer import LogWriter
-from lfdfuse.network.driver import NetworkDriver
+from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.network.table import FusionTable
 from lfdfuse.sim.loop import Sink
 from lfdfuse.sources.teleop.session import TeleopOptions, TeleopSession, TeleopSummary, teleop
 
 
-def correction_driver(opts: TeleopOptions, table: FusionTable) -> NetworkDriver:
+def correction_driver(opts: TeleopOptions, table: FusionTable) -> NetworkStepper:
     """The network of a correction run: ``execute``'s driver, as ``execute`` builds it for the
     same world, sensors, robot and seed (no heading noise: the learner drives as it would alone)."""
-    return NetworkDriver(
+    return NetworkStepper(
         table=table,
         world=opts.world,
         sensors=opts.sensors,
@@ -51,7 +51,7 @@ def correct(
     opts: TeleopOptions,
     *,
     session: TeleopSession,
-    driver: NetworkDriver,
+    driver: NetworkStepper,
     table_name: str,
     out: str | Path,
     sinks: tuple[Sink, ...] = (),

@@ -2,42 +2,28 @@
 
 :class:`LfdRecorder` is a sink of the simulation loop (or of ``drive``'s and ``teleop --table``'s
 recorders): every tick the behaviour outputs, BAC, active step and fused vector the network
-decided on, an overlay of one arrow per weighted behaviour, and on ``/lfd/network`` each request
-for help (a BAC the table has no row for, or an unidentifiable row).
+decided on, an overlay of one arrow per weighted behaviour (in the behaviour's catalogue colour,
+as every figure draws it), and on ``/lfd/network`` each request for help (a BAC the table has no
+row for, or an unidentifiable row).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from lfdfuse.behaviors import catalogue
 from lfdfuse.log import lfd
 from lfdfuse.log import messages as msg
 from lfdfuse.log.writer import LogWriter
-from lfdfuse.network.driver import NetworkDriver
 from lfdfuse.network.runtime import step_name_of
+from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.sim.simulator import Observation
-
-PALETTE = [
-    (0.9, 0.3, 0.2),
-    (0.2, 0.6, 0.9),
-    (0.3, 0.8, 0.3),
-    (0.9, 0.7, 0.1),
-    (0.7, 0.3, 0.9),
-    (0.1, 0.8, 0.8),
-    (0.9, 0.4, 0.7),
-    (0.6, 0.5, 0.3),
-    (0.5, 0.5, 0.9),
-    (0.8, 0.8, 0.5),
-    (0.4, 0.7, 0.5),
-    (0.9, 0.6, 0.4),
-    (0.6, 0.6, 0.6),
-]
 
 
 class LfdRecorder:
     """Logs the network's decision of every tick on the ``/lfd/*`` channels of DESIGN §5."""
 
-    def __init__(self, log: LogWriter, driver: NetworkDriver) -> None:
+    def __init__(self, log: LogWriter, driver: NetworkStepper) -> None:
         self.log = log
         self.driver = driver
         for topic, schema in lfd.EXECUTE_TOPICS.items():
@@ -74,7 +60,7 @@ class LfdRecorder:
             msg.Arrow(
                 dec.weights[n] * float(vec[j, 0]),
                 dec.weights[n] * float(vec[j, 1]),
-                PALETTE[j % len(PALETTE)],
+                catalogue.rgb(n),  # the behaviour's colour in every figure
                 1.5,
             )
             for j, n in enumerate(names)

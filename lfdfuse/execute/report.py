@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from lfdfuse.files import write_text_atomic
-from lfdfuse.network.driver import HelpRequest, NetworkDriver
+from lfdfuse.network.stepper import HelpRequest, NetworkStepper
 from lfdfuse.network.table import FusionTable, leaf_steps
 from lfdfuse.sim.loop import RunSummary
 
@@ -76,7 +76,7 @@ def goal_list(table: FusionTable) -> list[tuple[str, str]]:
     return [(s.name, s.goal) for s in leaf_steps(table) if s.goal is not None]
 
 
-def network_report(summary: RunSummary, driver: NetworkDriver) -> dict[str, Any]:
+def network_report(summary: RunSummary, driver: NetworkStepper) -> dict[str, Any]:
     """:func:`build_report` of a run the network ``driver`` drove (execute, ``teleop --table``)."""
     return build_report(
         summary,

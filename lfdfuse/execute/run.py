@@ -18,7 +18,7 @@ from lfdfuse.execute.record import LfdRecorder
 from lfdfuse.execute.report import network_report
 from lfdfuse.log.recorder import Recorder, provenance
 from lfdfuse.log.writer import LogWriter
-from lfdfuse.network.driver import NetworkDriver
+from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.network.table import FusionTable
 from lfdfuse.sim.loop import RunSummary, Sink, run
 from lfdfuse.sim.robot import Pose, RobotParams
@@ -55,7 +55,7 @@ def drive_table(
         raise ConfigError("--max-time must be positive")
     rng = np.random.default_rng(opts.seed)
     params = SensorParams().with_noise(opts.sensor_noise_m) if opts.sensor_noise_m > 0 else SensorParams()
-    driver = NetworkDriver(
+    driver = NetworkStepper(
         table=opts.table,
         world=opts.world,
         sensors=params,

@@ -19,7 +19,7 @@ import math
 import operator
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Literal, get_args
 
 import numpy as np
 
@@ -380,7 +380,8 @@ def decode_fused(data: bytes) -> FusedVector:
 
 #: why the network asks for help: the BAC has no row in the active step, or its row's weights
 #: are not identifiable from the demonstration (the prior decides them)
-HELP_REASONS = ("unseen BAC", "not identifiable")
+HelpReason = Literal["unseen BAC", "not identifiable"]
+HELP_REASONS: tuple[HelpReason, ...] = get_args(HelpReason)
 NETWORK_EVENTS = ("help",)
 
 

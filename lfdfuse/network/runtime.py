@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lfdfuse.behaviors.primitives import BehaviorOutputs
-from lfdfuse.network.landmarks import Cues, Progress
+from lfdfuse.network.landmark_goals import Cues, Progress
 from lfdfuse.network.table import FusionTable, Network, Step
 
 Path = tuple[int, ...]

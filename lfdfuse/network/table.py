@@ -12,10 +12,11 @@ from typing import Any
 
 import yaml
 
-from lfdfuse.behaviors.primitives import ATTRACT, BASE_BEHAVIORS
+from lfdfuse.behaviors import catalogue
+from lfdfuse.behaviors.spec import attract_target
 from lfdfuse.errors import ConfigError
 from lfdfuse.files import read_yaml, write_text_atomic
-from lfdfuse.network.landmarks import Landmark
+from lfdfuse.network.landmark_goals import Landmark
 from lfdfuse.validate import integer, number
 
 FORMAT = "lfdfuse/fusion-table@1"
@@ -94,7 +95,7 @@ class FusionTable:
 
     def targets(self) -> list[str]:
         """Targets the table needs: its attract behaviours and goals."""
-        need = [b[len(ATTRACT) :] for b in self.behaviors if b.startswith(ATTRACT)]
+        need = [t for b in self.behaviors if (t := attract_target(b)) is not None]
         for g in self.goals():
             if g not in need:
                 need.append(g)
@@ -102,18 +103,9 @@ class FusionTable:
 
 
 def default_weights_for(behaviors: list[str] | tuple[str, ...]) -> dict[str, float]:
-    """Safe wandering for BACs never seen in training: avoid, plus the wander behaviours."""
-    w: dict[str, float] = {}
-    if "avoid" in behaviors:
-        w["avoid"] = 1.0
-    if "sonar_avoid" in behaviors:
-        w["sonar_avoid"] = 0.5
-    wanders = [b for b in ("wander", "wander_left", "wander_right") if b in behaviors]
-    for b in wanders:
-        w[b] = round(1.0 / len(wanders), 4)
-    if not w:
-        w = {b: 1.0 for b in behaviors}
-    return w
+    """Safe wandering for BACs never seen in training: avoid, plus the wander behaviours (each
+    behaviour's default role in the catalogue)."""
+    return catalogue.default_weights_for(behaviors)
 
 
 # ---------------------------------------------------------------------------- parsing
@@ -253,9 +245,9 @@ def parse_table(data: Any) -> FusionTable:
     if not isinstance(beh, list) or not beh or not all(isinstance(b, str) for b in beh):
         raise ConfigError("fusion table: behaviors must be a non-empty list of names")
     for b in beh:
-        if b not in BASE_BEHAVIORS and not (b.startswith(ATTRACT) and len(b) > len(ATTRACT)):
+        if catalogue.spec_of(b) is None:
             raise ConfigError(
-                f"fusion table: unknown behaviour {b!r} in behaviors (valid: {', '.join(BASE_BEHAVIORS)}, attract_<target>)"
+                f"fusion table: unknown behaviour {b!r} in behaviors (valid: {', '.join(catalogue.BASE_BEHAVIORS)}, attract_<target>)"
             )
     if len(set(beh)) != len(beh):
         raise ConfigError("fusion table: behaviors names a behaviour twice")

@@ -12,7 +12,7 @@ divergence made one: there the fusion, replayed on the teacher's track, already 
 the teacher (it sees the opening the teacher is turning into), though the robot driving on
 would not. Each decision splits the goal segment into
 *drive on to the n-th opening on that side* | *turn into it* | *the rest*, with landmarks the
-robot recognises from its own sensors (:mod:`lfdfuse.behaviors.landmarks`): the opening's
+robot recognises from its own sensors (:mod:`lfdfuse.behaviors.openings`): the opening's
 side, shape and order (:class:`OpeningCue`), and the heading change — this share of the
 teacher's whole turn, and no less than it less ``turn_margin_rad`` (a turn ended short leaves
 the robot at the tip of the corner it turns round).
@@ -37,7 +37,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from lfdfuse.behaviors.landmarks import SIDES, PassParams
+from lfdfuse.behaviors.openings import SIDES, PassParams
 from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.segment.track import (
     LandmarkTrack,

@@ -56,6 +56,7 @@ def observations_of(run: Run) -> Observations:
         sonar_m=run.sonar_m,
         sonar_angles_rad=None if sg is None else sg.angles,
         sonar_max_m=math.inf if sg is None else sg.max_range_m,
+        pose=run.pose,
     )
 
 

@@ -12,7 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lfdfuse.behaviors.primitives import ATTRACT, BehaviorOutputs
+from lfdfuse.behaviors.primitives import BehaviorOutputs
+from lfdfuse.behaviors.spec import attract_target
 
 
 @dataclass(frozen=True)
@@ -26,7 +27,7 @@ class GoalSegment:
 
     @property
     def target(self) -> str | None:
-        return self.goal[len(ATTRACT) :] if self.goal and self.goal.startswith(ATTRACT) else None
+        return attract_target(self.goal) if self.goal else None
 
 
 @dataclass(frozen=True)

@@ -20,6 +20,7 @@ from lfdfuse.behaviors.primitives import (
     DEFAULT_PRESET,
     BehaviorOutputs,
     BehaviorParams,
+    BehaviorState,
     Observations,
     compute,
     resolve_behaviors,
@@ -192,27 +193,20 @@ def drive_params_of(metadata: dict[str, str]) -> DriveParams:
 def compute_in_chunks(
     obs: Observations, names: list[str] | tuple[str, ...], params: BehaviorParams, *, rows: int = 2048
 ) -> BehaviorOutputs:
-    """:func:`compute` over a whole log a block of scans at a time: the same result (the primitives
-    are per scan), with temporaries of ``rows × beams`` instead of ``N × beams``."""
+    """:func:`compute` over a whole log a block of scans at a time, with temporaries of
+    ``rows × beams`` instead of ``N × beams``. One :class:`BehaviorState` is carried from block
+    to block, so a stateful primitive sees the scans in order as a live run does: the result is
+    the same as computing the log in one piece, or tick by tick."""
     n = len(obs.ranges_m)
+    state = BehaviorState(names, params)
     if n <= rows:
-        return compute(obs, names, params)
-    parts = [compute(_rows_of(obs, a, min(a + rows, n)), names, params) for a in range(0, n, rows)]
+        return compute(obs, names, params, state)
+    parts = [compute(obs.rows(a, min(a + rows, n)), names, params, state) for a in range(0, n, rows)]
     return BehaviorOutputs(
         parts[0].names,
         np.concatenate([p.vectors for p in parts]),
         np.concatenate([p.applicable for p in parts]),
         np.concatenate([p.goal_met for p in parts]),
-    )
-
-
-def _rows_of(obs: Observations, a: int, b: int) -> Observations:
-    return replace(
-        obs,
-        ranges_m=obs.ranges_m[a:b],
-        sonar_m=None if obs.sonar_m is None else obs.sonar_m[a:b],
-        target_bearing_rad=obs.target_bearing_rad[a:b],
-        target_range_m=obs.target_range_m[a:b],
     )
 
 

@@ -1,5 +1,5 @@
 """The demo's landmark cues, step by step: what a robot driving the demo's way would recognise
-from its own sensors (:mod:`lfdfuse.behaviors.landmarks`) — openings met on either side, the
+from its own sensors (:mod:`lfdfuse.behaviors.openings`) — openings met on either side, the
 way ahead, odometry and the heading held through a turn — and the queries
 :mod:`lfdfuse.segment.decisions` asks of them: where the teacher turned, the opening they turned
 into, its shape and order, and how far it was driven to.
@@ -15,7 +15,7 @@ from enum import StrEnum
 
 import numpy as np
 
-from lfdfuse.behaviors.landmarks import (
+from lfdfuse.behaviors.openings import (
     OpeningParams,
     PassParams,
     ahead_range,

@@ -9,32 +9,12 @@ from __future__ import annotations
 
 import colorsys
 
+from lfdfuse.behaviors import catalogue
 from lfdfuse.behaviors.names import legend_entry
-from lfdfuse.world.model import TARGET_COLORS
 
-#: behaviour name → hex colour (colour-blind-safe hues from the Okabe–Ito and Tol palettes)
-BEHAVIOR_COLORS: dict[str, str] = {
-    "avoid": "#444444",
-    "sonar_avoid": "#999999",
-    "wander": "#E69F00",
-    "wander_left": "#E69F00",
-    "wander_right": "#F5C85C",
-    "wall_attract": "#0072B2",
-    "wall_attract_left": "#0072B2",
-    "wall_attract_right": "#56B4E9",
-    "wall_side_left": "#009E73",
-    "wall_side_right": "#6FD3B3",
-    "circular_avoid_left": "#CC79A7",
-    "circular_avoid_right": "#E8B5D2",
-}
-
-#: hatches tell a right variant from its left one in greyscale print
-BEHAVIOR_HATCH: dict[str, str] = {
-    "wander_right": "//",
-    "wall_attract_right": "//",
-    "wall_side_right": "//",
-    "circular_avoid_right": "//",
-}
+#: behaviour name → hex colour (the catalogue's: colour-blind-safe hues from the Okabe–Ito and
+#: Tol palettes)
+BEHAVIOR_COLORS: dict[str, str] = {n: catalogue.color(n) for n in catalogue.BASE_BEHAVIORS}
 
 #: goal segments and network steps, in order: Tol's "bright" palette (without its grey, which
 #: is the colour of a tick after the last goal), then his "dark" one; :func:`step_color` goes on
@@ -57,7 +37,7 @@ WALL_COLOR = "#1a1a1a"
 OBSTACLE_COLOR = "#8c5a2b"
 PATH_COLOR = "#d62728"  # the paper draws the robot path in red (Fig. 5)
 COLLISION_COLOR = "#d62728"
-UNKNOWN_COLOR = "#7f7f7f"
+UNKNOWN_COLOR = catalogue.UNKNOWN_COLOR
 
 
 def _hex(rgb: tuple[float, float, float]) -> str:
@@ -66,18 +46,17 @@ def _hex(rgb: tuple[float, float, float]) -> str:
 
 def target_color(name: str) -> str:
     """The colour a target is drawn in (its name's colour, else grey)."""
-    return _hex(TARGET_COLORS.get(name, (0.6, 0.6, 0.6)))
+    return catalogue.target_color(name)
 
 
 def behavior_color(name: str) -> str:
-    """The fixed colour of a behaviour; ``attract_<target>`` takes its target's colour."""
-    if name.startswith("attract_"):
-        return target_color(name[len("attract_") :])
-    return BEHAVIOR_COLORS.get(name, UNKNOWN_COLOR)
+    """The fixed colour of a behaviour (the catalogue's); ``attract_<target>`` takes its target's."""
+    return catalogue.color(name)
 
 
 def behavior_hatch(name: str) -> str:
-    return BEHAVIOR_HATCH.get(name, "")
+    """The hatch that tells a right variant from its left one in greyscale print ('' : none)."""
+    return catalogue.hatch(name)
 
 
 def behavior_label(name: str) -> str:

@@ -16,7 +16,7 @@ from lfdfuse.drive.safety import Limits
 from lfdfuse.drive.wire import ServerChannel
 from lfdfuse.errors import ConfigError
 from lfdfuse.log import messages as msg
-from lfdfuse.network.driver import NetworkDriver
+from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step, load_table
 from lfdfuse.sim.sensors import Reading, SensorParams
 from lfdfuse.sim.simulator import Simulator
@@ -32,7 +32,7 @@ def test_the_core_commands_exactly_what_execute_would(keep_left: Path) -> None:
     params = SensorParams()
     lim = Limits(0.4, math.radians(100))
     core = DriveCore(table=table, limits=lim, inputs=Inputs(camera=True))
-    ref = NetworkDriver(table=table, world=world, sensors=params, rng=np.random.default_rng(0))
+    ref = NetworkStepper(table=table, world=world, sensors=params, rng=np.random.default_rng(0))
     sim = Simulator(world, np.random.default_rng(0), params)
     obs = sim.reset(None)
     moved = 0.0

@@ -19,14 +19,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lfdfuse import learn
-from lfdfuse.behaviors.landmarks import OpeningParams, OpeningSensor, opening_onsets, side_openings
+from lfdfuse.behaviors.openings import OpeningParams, OpeningSensor, opening_onsets, side_openings
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.log.reader import read_run
-from lfdfuse.network.driver import NetworkDriver
-from lfdfuse.network.landmarks import Ahead, Cues, Landmark, Progress
+from lfdfuse.network.landmark_goals import Ahead, Cues, Landmark, Progress
 from lfdfuse.network.runtime import DRIVE_ON_RAD, NetworkRuntime, keep_within
+from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.network.table import dump_table, parse_table
 from lfdfuse.segment.decisions import DecisionParams
 from lfdfuse.segment.read import read_segmented
@@ -422,7 +422,7 @@ def test_the_turn_out_of_a_spur_keeps_to_its_side_and_then_to_the_corridor(
     table = refine(paper, run, track_of(raw, run), opts=EstimateOptions()).table
     max_t = float(math.ceil(TIME_FACTOR * demo.duration_s / 10.0) * 10.0)
 
-    class Watched(NetworkDriver):
+    class Watched(NetworkStepper):
         """Notes the kinds of step whose fused vector the runtime kept to its way."""
 
         steered: set[str] = set()
@@ -474,7 +474,7 @@ def test_a_spur_just_past_a_corner_is_decided_and_driven_with_the_shorter_lag(tm
     def drive(params: DecisionParams) -> tuple[list[str], list[float | None]]:
         res = refine(paper, run, track, opts=EstimateOptions(), params=params)
         rng = np.random.default_rng(0)
-        drv = NetworkDriver(table=res.table, world=world, sensors=SensorParams(), rng=rng)
+        drv = NetworkStepper(table=res.table, world=world, sensors=SensorParams(), rng=rng)
         sim = Simulator(world, rng, SensorParams(), drv.robot)
         got = sim_run(sim, drv, start=Pose(*world.start), duration_s=max_t)
         return [g for g, _ in got.reached], [d.lag_m for d in res.decisions if d.segment == 1]

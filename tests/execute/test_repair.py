@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lfdfuse import learn
-from lfdfuse.behaviors.landmarks import OpeningParams
+from lfdfuse.behaviors.openings import OpeningParams
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.check import Check, demo_world, rollout, score

@@ -105,7 +105,7 @@ def test_the_report_file_round_trips_and_the_verdict_counts_goals(tmp_path: Path
 
 def test_help_requests_extend_the_report_and_read_as_one_line() -> None:
     from lfdfuse.execute.report import help_line
-    from lfdfuse.network.driver import HelpRequest
+    from lfdfuse.network.stepper import HelpRequest
 
     asks = [HelpRequest(k * 1_300_000_000, "reach-red", 5 + k, "unseen BAC") for k in range(5)]
     rep = build_report(_summary([]), goals=[], side={}, unseen_ticks=0, reflex_ticks=0, help=asks)

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lfdfuse.behaviors.primitives import BehaviorOutputs
-from lfdfuse.network.landmarks import Cues
+from lfdfuse.network.landmark_goals import Cues
 from lfdfuse.network.runtime import DRIVE_ON_RAD, SETTLE_M, SETTLE_RAD, NetworkRuntime, step_name_of
 from lfdfuse.network.table import FusionTable, parse_table
 

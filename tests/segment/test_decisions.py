@@ -11,7 +11,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from lfdfuse.behaviors.landmarks import OpeningParams
+from lfdfuse.behaviors.openings import OpeningParams
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, find_decisions, split_segments
 from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.segment.track import LandmarkTrack, OpeningCue, opening_order, runs

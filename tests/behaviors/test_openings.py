@@ -8,7 +8,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse.behaviors.landmarks import (
+from lfdfuse.behaviors.openings import (
     OpeningParams,
     OpeningTracker,
     PassedCounter,

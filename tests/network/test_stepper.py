@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.network.driver import NetworkDriver, check_table_world, weighted_targets
+from lfdfuse.network.stepper import NetworkStepper, check_table_world, weighted_targets
 from lfdfuse.network.table import parse_table
 from lfdfuse.sim.loop import run
 from lfdfuse.sim.sensors import SensorParams
@@ -55,15 +55,15 @@ def test_a_world_lacking_a_weighted_target_is_refused_by_name() -> None:
     with pytest.raises(ConfigError, match=r"targets red, blue that world 'corridor' lacks \(it has: none\)"):
         check_table_world(table, load_world("corridor"))
     with pytest.raises(ConfigError):
-        NetworkDriver(
+        NetworkStepper(
             table=table, world=load_world("corridor"), sensors=SensorParams(), rng=np.random.default_rng(0)
         )
 
 
-def _drive(seed: int, noise: float) -> tuple[np.ndarray, NetworkDriver]:
+def _drive(seed: int, noise: float) -> tuple[np.ndarray, NetworkStepper]:
     world, sensors = load_world("building"), SensorParams()
     rng = np.random.default_rng(seed)
-    driver = NetworkDriver(
+    driver = NetworkStepper(
         table=parse_table(TABLE), world=world, sensors=sensors, rng=rng, heading_noise_rad=noise
     )
     commands: list[tuple[float, float]] = []
@@ -94,7 +94,7 @@ def test_turns_on_the_spot_keep_to_the_side_they_began_on(monkeypatch: pytest.Mo
     leave it turning left and right in place: it keeps turning the way it began."""
     import math
 
-    import lfdfuse.network.driver as driver_module
+    import lfdfuse.network.stepper as driver_module
 
     swings = iter([math.radians(100.0), math.radians(-100.0)] * 40)
     monkeypatch.setattr(driver_module, "free_heading", lambda *args, **kwargs: next(swings))

@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.network.landmarks import Cues, Landmark, Progress
+from lfdfuse.network.landmark_goals import Cues, Landmark, Progress
 
 sides = st.sampled_from(["left", "right"])
 lags = st.none() | st.integers(1, 10_000).map(lambda mm: mm / 1000)

@@ -19,7 +19,7 @@ its own sensors — never map coordinates:
       reads open while the opening is still beside the robot;
     - the ``nth`` (or a later one) by ``count``: ``all`` onsets on that side (issue 15, and
       what a table without ``count`` means), or only the openings ``passed`` by, not turned
-      into (:class:`lfdfuse.behaviors.landmarks.PassedCounter`). Corners met while turning
+      into (:class:`lfdfuse.behaviors.openings.PassedCounter`). Corners met while turning
       come and go with the line each driver takes; counted, they made the robot take the
       opening before or after the teacher's from another start (issue 21);
     - or, with ``within_m``, the first one once ``odometry_m − within_m`` has been driven,
@@ -38,7 +38,7 @@ its own sensors — never map coordinates:
 
 Either may add ``lag_m: 1.5``: its openings and the heading its turn counts from are sensed with
 the opening sectors held 1.5 m of travel back instead of the sensor's default 2 m
-(:class:`~lfdfuse.behaviors.landmarks.OpeningSensor`; the runtime runs one sensor per lag a table
+(:class:`~lfdfuse.behaviors.openings.OpeningSensor`; the runtime runs one sensor per lag a table
 names). ``estimate`` writes it where the default sectors sensed no opening that makes the
 teacher's turn a decision: a spur a few metres past a corner, met while the default sectors
 still swing through the corner's turn.
@@ -54,7 +54,7 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any, ClassVar
 
-from lfdfuse.behaviors.landmarks import SIDES, PassedCounter
+from lfdfuse.behaviors.openings import SIDES, PassedCounter
 from lfdfuse.errors import ConfigError
 
 
@@ -142,7 +142,7 @@ class OpeningCount(StrEnum):
 
     #: every onset on the side (issue 15; a table without ``count`` means this)
     ALL = "all"
-    #: openings passed by, not turned into (:class:`lfdfuse.behaviors.landmarks.PassedCounter`)
+    #: openings passed by, not turned into (:class:`lfdfuse.behaviors.openings.PassedCounter`)
     PASSED = "passed"
 
 
@@ -161,7 +161,7 @@ class Landmark:
     #: met at the first opening on the side once ``odometry_m − within_m`` has been driven (nth unused)
     within_m: float | None = None
     #: sensed with the opening sectors held this far back (m of travel; None: the sensor's
-    #: default, :attr:`~lfdfuse.behaviors.landmarks.OpeningParams.lag_m`): a decision found where
+    #: default, :attr:`~lfdfuse.behaviors.openings.OpeningParams.lag_m`): a decision found where
     #: the default sectors were still swinging through the turn of a corner just before
     lag_m: float | None = None
     #: an opening matches only after this share of ``odometry_m`` has been driven

@@ -1,10 +1,13 @@
-"""A behaviour network as a command source: the learned controller, or a network *teacher*.
+"""A behaviour network stepped tick by tick: the learned controller, or a network *teacher*.
 
-:class:`NetworkDriver` senses through the same behaviour code as ``segment`` (one scan at a
-time), asks the :class:`~lfdfuse.network.runtime.NetworkRuntime` for the fused vector and turns
-it into a command with the one vector ↔ command mapping, below a safety reflex. It keeps what
-it decided (``last``) so a recorder can log why the robot turned, and asks for help
-(:class:`HelpRequest`) when it enters a BAC its table cannot drive with confidence.
+:class:`NetworkStepper` takes one observation per tick and answers one command. It senses
+through the same behaviour code as ``segment`` (one scan at a time, carrying the stateful
+primitives' state and the opening sensors from tick to tick, as ``segment`` carries them from
+scan to scan), asks the :class:`~lfdfuse.network.runtime.NetworkRuntime` for the fused vector
+and turns it into a command with the one vector ↔ command mapping, below a safety reflex. It
+keeps what it decided (``last``) so a recorder can log why the robot turned, and asks for help
+(:class:`HelpRequest`) when it enters a BAC its table cannot drive with confidence. ``execute``,
+``simulate``'s network teacher, ``teleop --table`` and ``drive`` all step the network through it.
 """
 
 from __future__ import annotations
@@ -12,16 +15,18 @@ from __future__ import annotations
 import math
 from collections import defaultdict
 from dataclasses import dataclass, replace
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
-from lfdfuse.behaviors.landmarks import OpeningSensor, ahead_range
-from lfdfuse.behaviors.primitives import ATTRACT, BehaviorParams, Observations, compute
+from lfdfuse.behaviors.openings import OpeningSensor, ahead_range
+from lfdfuse.behaviors.primitives import BehaviorParams, BehaviorState, Observations, compute
+from lfdfuse.behaviors.spec import attract_target
 from lfdfuse.control.drive import heading_to_command
 from lfdfuse.control.safety import SafetyParams, free_heading
 from lfdfuse.errors import ConfigError
-from lfdfuse.network.landmarks import Cues
+from lfdfuse.log.lfd import HelpReason
+from lfdfuse.network.landmark_goals import Cues
 from lfdfuse.network.runtime import Decision, NetworkRuntime, step_name_of
 from lfdfuse.network.table import FusionTable, Network, leaf_steps
 from lfdfuse.sim.loop import side_beam_index
@@ -30,7 +35,7 @@ from lfdfuse.sim.sensors import ScanGeometry, SensorParams, target_reached
 from lfdfuse.sim.simulator import Observation
 from lfdfuse.world.model import World
 
-HelpReason = Literal["unseen BAC", "not identifiable"]
+__all__ = ["HelpReason", "HelpRequest", "NetworkStepper", "help_reason", "weighted_targets"]
 
 
 @dataclass(frozen=True)
@@ -82,7 +87,7 @@ def weighted_targets(table: FusionTable) -> list[str]:
 
     walk(table.network)
     carried = {b for w in weights for b, v in w.items() if v > 0}
-    return [b[len(ATTRACT) :] for b in table.behaviors if b.startswith(ATTRACT) and b in carried]
+    return [t for b in table.behaviors if (t := attract_target(b)) is not None and b in carried]
 
 
 def check_table_world(table: FusionTable, world: World) -> None:
@@ -105,8 +110,9 @@ def landmark_lags(table: FusionTable) -> list[float]:
 _ON_THE_SPOT_RAD = math.radians(85.0)
 
 
-class NetworkDriver:
-    """Drives with a fusion table; optional heading noise makes it a network *teacher*."""
+class NetworkStepper:
+    """Steps a fusion table's network one observation at a time into commands; optional heading
+    noise makes it a network *teacher*. One per run: it carries the run's state from tick to tick."""
 
     def __init__(
         self,
@@ -127,6 +133,8 @@ class NetworkDriver:
         self.runtime = NetworkRuntime(table)
         self.sensors = sensors
         self.params = BehaviorParams(reach_m=sensors.camera.reach_m)
+        #: what the stateful primitives carry from tick to tick
+        self.behavior_state = BehaviorState(table.behaviors, self.params)
         self.rng = rng
         self.noise = heading_noise_rad
         self.robot = robot
@@ -145,7 +153,7 @@ class NetworkDriver:
         self.side: dict[str, list[tuple[float, float]]] = defaultdict(list)
         self._il = side_beam_index(self.geometry.angles, math.pi / 2)
         self._ir = side_beam_index(self.geometry.angles, -math.pi / 2)
-        self.openings = OpeningSensor(self.geometry)  # landmark cues for sub-goal steps (issue 15)
+        self.openings = OpeningSensor(self.geometry)  # landmark cues for sub-goal steps
         #: and for the landmarks sensed with their sectors held another way back
         self.lagged = [
             OpeningSensor(self.geometry, replace(self.openings.params, lag_m=lag))
@@ -210,8 +218,9 @@ class NetworkDriver:
             sonar_m=reading.sonar_m[None, :] if len(reading.sonar_m) else None,  # a robot without sonar
             sonar_angles_rad=self.sonar_angles,
             sonar_max_m=self.sensors.sonar.max_range_m,
+            pose=np.array([[observation.pose.x, observation.pose.y, observation.pose.theta]]),
         )
-        outputs = compute(obs, self.table.behaviors, self.params)
+        outputs = compute(obs, self.table.behaviors, self.params, self.behavior_state)
         reached = {d.name for d in reading.detections if target_reached(d.range_m, self.sensors.camera)}
         dec = self.runtime.decide(outputs, reached, self._cues(observation))
         for goal in dec.achieved_now:

@@ -1,0 +1,314 @@
+"""What a behaviour primitive is: its spec in the catalogue, what it sees, and what it computes.
+
+A primitive (DESIGN §4) maps what the robot senses to a robot-frame vector with norm in [0, 1],
+a precondition (applicable now?) and optionally a goal. Each one is described once, by a
+:class:`BehaviorSpec` in a module of :mod:`lfdfuse.behaviors.library`: its name, the paper's
+acronym, its colour in every figure, the inputs it needs, its role in the default weights and
+how to make its :class:`Primitive` — the small object that computes it, scan block after scan
+block, with whatever it must remember from one scan to the next.
+
+The same primitive object computes a whole log offline (one block of ``N`` scans after
+another) and a live run (blocks of one scan): a stateful primitive carries its state across
+block boundaries, so the two give the same result (the blocks = live law, tested).
+
+:class:`Scan` is one block of observations with the per-beam quantities most primitives share
+(beam bearings, which returns count, which lie nearer than ``d_max``, the sectors), each
+computed once per block and only when asked for.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Literal, Protocol
+
+import numpy as np
+
+from lfdfuse.sim.sensors import Detection, ScanGeometry
+
+#: the name prefix of the behaviours toward a target: ``attract_<target>``
+ATTRACT = "attract_"
+
+#: what a primitive may need besides nothing: the laser, the rear sonars, a camera reporting
+#: targets, wheel odometry (increments only, never a map position)
+Input = Literal["laser", "sonar", "camera", "odometry"]
+INPUTS: tuple[Input, ...] = ("laser", "sonar", "camera", "odometry")
+
+
+def attract_target(name: str) -> str | None:
+    """The target of an ``attract_<target>`` behaviour (or goal name), else None.
+
+    >>> attract_target("attract_red"), attract_target("avoid")
+    ('red', None)
+    """
+    return name[len(ATTRACT) :] if name.startswith(ATTRACT) and len(name) > len(ATTRACT) else None
+
+
+@dataclass(frozen=True)
+class BehaviorParams:
+    """Parameters of the primitives (metres, radians)."""
+
+    d_max_m: float = 2.0  # laser returns nearer than this matter (the paper's d_max)
+    side_sector_rad: float = math.pi / 2  # *_left / *_right look at this much in front of each side
+    front_cone_rad: float = math.radians(10.0)  # circular_avoid: full width of the front cone
+    circular_turn_rad: float = math.radians(30.0)  # circular_avoid: direction to its side
+    sonar_threshold_m: float = 1.0  # sonar_avoid applies below this rear range
+    reach_m: float = 0.75  # attract_<target> goal: the target seen within this range
+
+
+@dataclass(frozen=True)
+class Observations:
+    """What the primitives see, for ``N`` instants in time order.
+
+    ``ranges_m (N, B)`` with beam angles from ``geometry``; ``sonar_m (N, S)`` at
+    ``sonar_angles_rad (S,)`` (None: no sonar); targets ``(N, T)`` arrays, NaN where unseen;
+    ``pose (N, 3)`` odometry (x, y, heading; only increments between scans are used; None: no
+    odometry).
+    """
+
+    ranges_m: np.ndarray
+    geometry: ScanGeometry
+    sonar_m: np.ndarray | None
+    sonar_angles_rad: np.ndarray | None
+    sonar_max_m: float
+    target_names: tuple[str, ...]
+    target_bearing_rad: np.ndarray
+    target_range_m: np.ndarray
+    pose: np.ndarray | None = None
+
+    @staticmethod
+    def from_detections(
+        *,
+        ranges_m: np.ndarray,
+        geometry: ScanGeometry,
+        detections: Sequence[Sequence[Detection]],
+        target_names: Sequence[str],
+        sonar_m: np.ndarray | None = None,
+        sonar_angles_rad: np.ndarray | None = None,
+        sonar_max_m: float = math.inf,
+        pose: np.ndarray | None = None,
+    ) -> Observations:
+        n, t = len(ranges_m), len(target_names)
+        bearing = np.full((n, t), np.nan)
+        rng = np.full((n, t), np.nan)
+        col = {name: i for i, name in enumerate(target_names)}
+        for k, dets in enumerate(detections):
+            for d in dets:
+                j = col.get(d.name)
+                if j is not None:
+                    bearing[k, j], rng[k, j] = d.bearing_rad, d.range_m
+        return Observations(
+            np.atleast_2d(np.asarray(ranges_m, dtype=np.float64)),
+            geometry,
+            None if sonar_m is None else np.atleast_2d(np.asarray(sonar_m, dtype=np.float64)),
+            sonar_angles_rad,
+            sonar_max_m,
+            tuple(target_names),
+            bearing,
+            rng,
+            None if pose is None else np.atleast_2d(np.asarray(pose, dtype=np.float64)),
+        )
+
+    def rows(self, a: int, b: int) -> Observations:
+        """The instants ``a`` to ``b`` (a block of scans)."""
+        return Observations(
+            self.ranges_m[a:b],
+            self.geometry,
+            None if self.sonar_m is None else self.sonar_m[a:b],
+            self.sonar_angles_rad,
+            self.sonar_max_m,
+            self.target_names,
+            self.target_bearing_rad[a:b],
+            self.target_range_m[a:b],
+            None if self.pose is None else self.pose[a:b],
+        )
+
+
+def wrap(a: np.ndarray) -> np.ndarray:
+    return np.asarray(np.arctan2(np.sin(a), np.cos(a)))
+
+
+def dot(weights: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+    """``Σᵢ wᵢ·dirᵢ``: ``(N, B) × (B, 2) → (N, 2)``.
+
+    Row-wise reductions, not a BLAS matmul: each row's result is bit-identical whether it is
+    computed alone (live) or in a batch (offline).
+    """
+    return np.column_stack([(weights * dirs[:, 0]).sum(axis=1), (weights * dirs[:, 1]).sum(axis=1)])
+
+
+def pool_strongest(weights: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+    """Direction of ``Σ wᵢ·dirᵢ`` with length ``max wᵢ``: ``(N, B) × (B, 2) → (N, 2)``."""
+    s = dot(weights, dirs)
+    norm = np.hypot(s[:, 0], s[:, 1])
+    mag = weights.max(axis=1, initial=0.0)
+    scale = np.divide(mag, norm, out=np.zeros_like(norm), where=norm > 1e-12)
+    return np.asarray(s * scale[:, None])
+
+
+def distinct_beams(g: ScanGeometry) -> np.ndarray:
+    """``(B,)`` mask of beams whose bearing no earlier beam already has.
+
+    A scanner sweeping more than a full turn (the Neato's 361 beams from −π to +π) repeats its
+    first bearings at the end; counting them twice would tilt every sum toward the seam.
+
+    >>> distinct_beams(ScanGeometry(-math.pi, math.pi / 180, 361, 5.0)).sum()
+    np.int64(360)
+    """
+    own = np.ones(g.count, dtype=bool)
+    step = abs(g.increment_rad)
+    if g.count > 1 and step > 0 and step * (g.count - 1) >= 2 * math.pi - step / 2:
+        own[int(round(2 * math.pi / step)) :] = False
+    return own
+
+
+class Scan:
+    """A block of ``N`` observations and the per-beam quantities the primitives share.
+
+    A beam has *no return* when its range is inf, NaN, ≤ 0, or at/above the scanner's max range
+    (the sentinel real scanners and our logs use); such beams count as open space. Sectors are
+    chosen by beam bearing, never by beam index, so any scanner geometry works; a beam repeating
+    an earlier bearing (a 360° + 1 scanner) belongs to no sector.
+    """
+
+    def __init__(self, obs: Observations, params: BehaviorParams) -> None:
+        self.obs = obs
+        self.params = params
+        self.r = obs.ranges_m
+        self.n = int(self.r.shape[0])
+
+    @cached_property
+    def ang(self) -> np.ndarray:
+        """``(B,)`` beam bearings in (−π, π]."""
+        return wrap(self.obs.geometry.angles)
+
+    @cached_property
+    def dirs(self) -> np.ndarray:
+        """``(B, 2)`` unit vectors along the beams."""
+        return np.column_stack([np.cos(self.ang), np.sin(self.ang)])
+
+    @cached_property
+    def own(self) -> np.ndarray:
+        """``(B,)`` beams whose bearing no earlier beam has (:func:`distinct_beams`)."""
+        return distinct_beams(self.obs.geometry)
+
+    @cached_property
+    def valid(self) -> np.ndarray:
+        """``(N, B)`` returns that count (finite, positive, below max range, own bearing)."""
+        r = self.r
+        return np.asarray(
+            np.isfinite(r) & (r > 0.0) & (r < self.obs.geometry.max_range_m) & self.own[None, :]
+        )
+
+    @cached_property
+    def near(self) -> np.ndarray:
+        """``(N, B)`` returns nearer than ``d_max``."""
+        return np.asarray(self.valid & (self.r < self.params.d_max_m))
+
+    @cached_property
+    def rn(self) -> np.ndarray:
+        """``(N, B)`` ranges of near returns, ``d_max`` elsewhere."""
+        return np.where(self.near, self.r, self.params.d_max_m)
+
+    @cached_property
+    def push(self) -> np.ndarray:
+        """``(N, B)`` repulsion strength ``(d_max − r) / d_max`` of near returns, 0 elsewhere."""
+        d = self.params.d_max_m
+        return np.where(self.near, (d - self.rn) / d, 0.0)
+
+    @cached_property
+    def front(self) -> np.ndarray:
+        """``(B,)`` beams in the front half."""
+        return np.asarray((np.abs(self.ang) <= math.pi / 2 + 1e-9) & self.own)
+
+    @cached_property
+    def left(self) -> np.ndarray:
+        """``(B,)`` beams from straight ahead to ``side_sector_rad`` to the left."""
+        a = self.ang
+        return np.asarray((a >= -1e-9) & (a <= self.params.side_sector_rad + 1e-9) & self.own)
+
+    @cached_property
+    def right(self) -> np.ndarray:
+        """``(B,)`` beams from straight ahead to ``side_sector_rad`` to the right."""
+        a = self.ang
+        return np.asarray((a <= 1e-9) & (a >= -self.params.side_sector_rad - 1e-9) & self.own)
+
+    @cached_property
+    def cone(self) -> np.ndarray:
+        """``(B,)`` beams in the front cone of ``front_cone_rad``."""
+        return np.asarray((np.abs(self.ang) <= self.params.front_cone_rad / 2 + 1e-9) & self.own)
+
+
+@dataclass(frozen=True)
+class Result:
+    """A primitive over a block: ``vector (N, 2)``, ``applicable (N,)``, ``goal (N,)`` (None: the
+    primitive has no goal). The vector of an inapplicable instant is zeroed by the caller."""
+
+    vector: np.ndarray
+    applicable: np.ndarray
+    goal: np.ndarray | None = None
+
+
+class Primitive(Protocol):
+    """One behaviour of a set, computing block after block of scans in time order.
+
+    ``reset`` forgets what earlier scans left (a new log, a new run); ``step`` computes a block
+    and keeps what the next block needs. A stateless primitive keeps nothing.
+    """
+
+    def reset(self) -> None: ...
+
+    def step(self, scan: Scan) -> Result: ...
+
+
+class Stateless:
+    """A primitive that remembers nothing between scans: a function of the block alone."""
+
+    def __init__(self, fn: Callable[[Scan], Result]) -> None:
+        self.fn = fn
+
+    def reset(self) -> None:
+        pass
+
+    def step(self, scan: Scan) -> Result:
+        return self.fn(scan)
+
+
+#: a behaviour's part in the weights a table uses for BACs it never saw: none; a fixed weight
+#: (``avoid`` 1, ``sonar_avoid`` 0.5); or an equal share of 1 among the set's wanderers
+DefaultRole = Literal["none", "fixed", "share"]
+
+
+@dataclass(frozen=True)
+class BehaviorSpec:
+    """One entry of the catalogue: everything the rest of lfdfuse knows about a behaviour.
+
+    ``name`` is the canonical name, or with ``family`` the prefix of a family of names
+    (``attract_`` for ``attract_<target>``); ``rank`` orders the catalogue (``BASE_BEHAVIORS``,
+    error messages, the ``full`` preset's order); ``make(name, params)`` builds the primitive
+    for one name of the spec. ``color`` is a ``#RRGGBB`` hex colour ("" for a family drawn in its
+    target's colour), ``hatch`` tells a right variant from its left one in greyscale print.
+    """
+
+    name: str
+    acronym: str
+    color: str
+    rank: int
+    make: Callable[[str, BehaviorParams], Primitive]
+    inputs: frozenset[Input] = frozenset({"laser"})
+    default_role: DefaultRole = "none"
+    default_weight: float = 0.0
+    hatch: str = ""
+    family: bool = False
+    meaning: str = ""
+
+    def names(self, name: str) -> bool:
+        """Whether ``name`` is this behaviour (or a member of this family)."""
+        return name.startswith(self.name) and len(name) > len(self.name) if self.family else name == self.name
+
+
+def stateless(fn: Callable[[Scan], Result]) -> Callable[[str, BehaviorParams], Primitive]:
+    """A spec's ``make`` for a primitive that is a function of the block alone."""
+    return lambda _name, _params: Stateless(fn)
