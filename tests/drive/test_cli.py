@@ -9,8 +9,8 @@ import yaml
 from typer.testing import CliRunner
 
 from lfdfuse.cli.main import app
-from lfdfuse.tools.bridge_sim import BridgeSim
 from lfdfuse.world.model import load_world
+from tests.support.bridge_sim import BridgeSim
 
 runner = CliRunner()
 

@@ -18,14 +18,13 @@ from lfdfuse.drive.decode import (
     LiveTf,
     LiveTwist,
     Role,
-    decoder_for,
-    role_of,
     twist_encoder,
 )
-from lfdfuse.drive.wire import ServerChannel
+from lfdfuse.drive.decoders import decoder_for, role_of
+from lfdfuse.drive.foxglove.wire import ServerChannel
 from lfdfuse.log import messages as msg
 from lfdfuse.sim.sensors import LaserParams
-from lfdfuse.tools.bridge_sim import _tf, cdr_odom, cdr_scan, cdr_tf
+from tests.support.bridge_sim import _tf, cdr_odom, cdr_scan, cdr_tf
 
 STORE = get_typestore(Stores.ROS2_HUMBLE)
 
