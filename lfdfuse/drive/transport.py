@@ -5,7 +5,7 @@ A :class:`Transport` opens a :class:`Link` to one robot; the link is an async st
 open) and :class:`Arrival` events (a decoded record, its :class:`~lfdfuse.drive.decode.Role`
 and when it arrived), and it sends commands. Everything else — signals, ``--duration``,
 reconnecting with back-off, the stale-scan watchdog, latency, the recording, the summary —
-is the run's (:mod:`lfdfuse.drive.session`) and the same for every transport.
+is the run's (:mod:`lfdfuse.drive.lifecycle`) and the same for every transport.
 
 What is a protocol's own stays inside its transport: how channels are discovered and matched
 to roles (topic names, and for a DDS transport the QoS of each role), the encoding of the
