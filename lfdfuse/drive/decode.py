@@ -5,7 +5,8 @@ Two dialects (DESIGN §15): what ``foxglove_bridge`` sends — CDR with ``ros2ms
 ``geometry_msgs/msg/Twist``), deserialised by ``rosbags`` from the schema text the server
 advertises (no ROS install) — and what ``lfdfuse teleop --input foxglove`` sends: JSON
 ``foxglove.LaserScan``, ``foxglove.PoseInFrame``, ``foxglove.FrameTransform`` and
-``lfdfuse.TargetDetections``, read by the log's own codecs. Nothing format-specific leaks out:
+``lfdfuse.TargetDetections``, read by the log's own codecs. Which function reads which
+(encoding, schema) is :mod:`lfdfuse.drive.decoders`' registry. Nothing format-specific leaks out:
 every decoder returns a :class:`LiveScan`, :class:`LiveOdom`, :class:`LiveTf`,
 :class:`LiveTwist` or :class:`LiveTargets`, or raises :class:`DecodeError`.
 """
@@ -24,7 +25,6 @@ import orjson
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
-from lfdfuse.drive.wire import ServerChannel
 from lfdfuse.log.messages import decode_detections, decode_pose, decode_scan, yaw_of
 from lfdfuse.log.stamps import ROBOT_FRAME, from_stamp
 from lfdfuse.sim.sensors import Detection, LaserParams
@@ -49,24 +49,6 @@ class Role(Enum):
     TF = "tf"  #: transforms (the laser mounting)
     CMD = "cmd"  #: the robot's own velocity commands (recorded in --shadow)
     TARGETS = "targets"  #: a camera's target detections (lfdfuse's simulated robot)
-
-
-#: (message encoding, schema name) → role
-KNOWN: dict[tuple[str, str], Role] = {
-    ("cdr", "sensor_msgs/msg/LaserScan"): Role.SCAN,
-    ("cdr", "nav_msgs/msg/Odometry"): Role.ODOM,
-    ("cdr", "tf2_msgs/msg/TFMessage"): Role.TF,
-    ("cdr", TWIST): Role.CMD,
-    ("cdr", TWIST_STAMPED): Role.CMD,
-    ("json", "foxglove.LaserScan"): Role.SCAN,
-    ("json", "foxglove.PoseInFrame"): Role.ODOM,
-    ("json", "foxglove.FrameTransform"): Role.TF,
-    ("json", "geometry_msgs/Twist"): Role.CMD,
-    ("json", TWIST): Role.CMD,
-    ("json", TWIST_STAMPED): Role.CMD,
-    ("json", "lfdfuse.Twist"): Role.CMD,
-    ("json", "lfdfuse.TargetDetections"): Role.TARGETS,
-}
 
 
 @dataclass(frozen=True, eq=False)
@@ -116,10 +98,6 @@ Record = LiveScan | LiveOdom | LiveTf | LiveTwist | LiveTargets
 Decoder = Callable[[bytes], Record]
 
 
-def role_of(ch: ServerChannel) -> Role | None:
-    return KNOWN.get((ch.encoding, ch.schema_name))
-
-
 def _frame(name: str) -> str:
     return name.lstrip("/")
 
@@ -162,18 +140,6 @@ def typestore_for(schema_name: str, schema: str) -> Typestore:
     return store
 
 
-def _cdr(store: Typestore, name: str, read: Callable[[Any], Record]) -> Decoder:
-    def decode(data: bytes) -> Record:
-        try:
-            return read(store.deserialize_cdr(data, name))
-        except DecodeError:
-            raise
-        except Exception as exc:  # a truncated or foreign payload fails anywhere in the generated code
-            raise DecodeError(f"undecodable {name} ({exc.__class__.__name__})") from None
-
-    return decode
-
-
 def _cdr_scan(m: Any) -> LiveScan:
     max_m = round(float(m.range_max), 6)  # float32 in the message: 5.6, not 5.5999999
     ranges = no_return(np.asarray(m.ranges, dtype=np.float64), min_m=float(m.range_min), max_m=max_m)
@@ -210,19 +176,6 @@ def _cdr_twist(m: Any) -> LiveTwist:
 # -- JSON (lfdfuse's own server) ----------------------------------------------------------------
 
 
-def _json(name: str, read: Callable[[dict[str, Any]], Record]) -> Decoder:
-    def decode(data: bytes) -> Record:
-        try:
-            msg = orjson.loads(data)
-            return read(msg)
-        except DecodeError:
-            raise
-        except (orjson.JSONDecodeError, KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
-            raise DecodeError(f"undecodable {name} ({exc.__class__.__name__})") from None
-
-    return decode
-
-
 def _json_scan(m: dict[str, Any]) -> LiveScan:
     s = decode_scan(m)
     n = len(s.ranges_m)
@@ -256,33 +209,6 @@ def _json_twist(data: bytes) -> Record:
 
 def _json_targets(m: dict[str, Any]) -> LiveTargets:
     return LiveTargets(from_stamp(m["timestamp"]), decode_detections(m))
-
-
-def decoder_for(ch: ServerChannel) -> Decoder:
-    """The decoder of an advertised channel whose :func:`role_of` is known."""
-    role = role_of(ch)
-    if role is None:
-        raise DecodeError(f"{ch.topic}: no decoder for {ch.encoding} {ch.schema_name}")
-    if ch.encoding == "cdr":
-        store = typestore_for(ch.schema_name, ch.schema)
-        cdr_reads: dict[Role, Callable[[Any], Record]] = {
-            Role.SCAN: _cdr_scan,
-            Role.ODOM: _cdr_odom,
-            Role.TF: _cdr_tf,
-            Role.CMD: _cdr_twist,
-        }
-        if role not in cdr_reads:
-            raise DecodeError(f"{ch.topic}: no decoder for {ch.encoding} {ch.schema_name}")
-        return _cdr(store, ch.schema_name, cdr_reads[role])
-    if role is Role.CMD:
-        return _json_twist
-    reads: dict[Role, Callable[[dict[str, Any]], Record]] = {
-        Role.SCAN: _json_scan,
-        Role.ODOM: _json_pose,
-        Role.TF: _json_tf,
-        Role.TARGETS: _json_targets,
-    }
-    return _json(ch.schema_name, reads[role])
 
 
 # -- the command we send ------------------------------------------------------------------------

@@ -1,6 +1,6 @@
 """What a live session is asked and what it answers: :class:`DriveOptions` in,
 :class:`DriveSummary` out, :class:`Stopper` to end it from outside, :class:`DriveError` when it
-cannot start or go on. The socket shell that runs it is :mod:`lfdfuse.drive.session`.
+cannot start or go on. The run itself is :mod:`lfdfuse.drive.lifecycle`.
 """
 
 from __future__ import annotations

@@ -8,53 +8,22 @@ the robot's own) and ``/lfd/command`` (``lfdfuse.DriveCommand``: the network's c
 or not, its latency and, in shadow, its heading error). Zero Twists of the watchdog and of the
 exit are on ``/cmd_vel`` and ``/lfd/command`` too. Log times are the robot's stamps, kept
 strictly increasing: a watchdog command between scans is placed by the wall time since the
-last scan.
+last scan, and one before the first scan (a new link's zero Twist) by the wall time until it,
+once it comes — the log starts on the robot's clock, not at 0.
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import replace
-from typing import Any
-
-import orjson
 
 from lfdfuse.drive.core import DriveCore, Tick
 from lfdfuse.execute.record import LfdRecorder
 from lfdfuse.log import messages as msg
-from lfdfuse.log.stamps import stamp
+from lfdfuse.log.command import DriveCommand
 from lfdfuse.log.writer import LogWriter
 
-COMMAND_TOPIC = "/lfd/command"
-COMMAND_SCHEMA = "lfdfuse.DriveCommand"
 ODOM_FRAME = "odom"
-
-
-def drive_command(
-    t_ns: int,
-    command: tuple[float, float],
-    *,
-    source: str,
-    sent: bool,
-    latency_ms: float | None,
-    heading_error_deg: float | None,
-) -> bytes:
-    """An ``lfdfuse.DriveCommand`` (see ``schemas/lfdfuse.DriveCommand.json``)."""
-    return orjson.dumps(
-        {
-            "timestamp": stamp(t_ns),
-            "linear": {"x": round(command[0], 6)},
-            "angular": {"z": round(command[1], 6)},
-            "source": source,
-            "sent": sent,
-            "latency_ms": None if latency_ms is None else round(latency_ms, 4),
-            "heading_error_deg": None if heading_error_deg is None else round(heading_error_deg, 4),
-        }
-    )
-
-
-def decode_drive_command(m: dict[str, Any]) -> tuple[float, float, str, bool]:
-    """Inverse of :func:`drive_command`: ``(v, ω, source, sent)``."""
-    return float(m["linear"]["x"]), float(m["angular"]["z"]), str(m["source"]), bool(m["sent"])
 
 
 class LogClock:
@@ -63,6 +32,15 @@ class LogClock:
     def __init__(self) -> None:
         self.last_ns = -1
         self._scan: tuple[int, float] | None = None  # (stamp, wall s) of the last scan
+
+    @property
+    def anchored(self) -> bool:
+        """A scan has set the clock (:meth:`at_wall` before it has nothing to count from)."""
+        return self._scan is not None
+
+    def anchor(self, stamp_ns: int, wall_s: float) -> None:
+        """Set the clock before a scan does (the first scan's stamp, or our epoch clock)."""
+        self._scan = (stamp_ns, wall_s)
 
     def at_scan(self, stamp_ns: int, wall_s: float) -> int:
         t = max(stamp_ns, self.last_ns + 1, 0)
@@ -87,12 +65,15 @@ class LiveRecorder:
         self.shadow = shadow
         self.clock = LogClock()
         self._lfd: LfdRecorder | None = None
-        log.add_topic(COMMAND_TOPIC, COMMAND_SCHEMA)
+        self._early: list[tuple[float, str]] = []  # zero Twists before the first scan: (wall s, source)
+        log.add_topic(DriveCommand.TOPIC, DriveCommand.SCHEMA)
         self.ticks = 0
 
     def tick(self, tick: Tick, *, wall_s: float, latency_ms: float | None) -> None:
         core, log = self.core, self.log
         assert core.frame is not None and core.driver is not None and core.mount is not None
+        if not self.clock.anchored:
+            self._place_early(tick.obs.t_ns, wall_s)
         t = self.clock.at_scan(tick.obs.t_ns, wall_s)
         obs = tick.obs
         scan = msg.laser_scan(t, obs.reading.ranges_m, core.frame.geometry)
@@ -118,26 +99,30 @@ class LiveRecorder:
         held = tick.robot if self.shadow else tick.network
         if held is not None:
             log.write("/cmd_vel", t, msg.twist(t, held[0], held[1]))
-        log.write_raw(
-            COMMAND_TOPIC,
-            t,
-            drive_command(
-                t,
-                tick.network,
-                source="network",
-                sent=not self.shadow,
-                latency_ms=latency_ms,
-                heading_error_deg=tick.heading_error_deg,
-            ),
-        )
+        v, w = tick.network
+        cmd = DriveCommand(t, v, w, "network", not self.shadow, latency_ms, tick.heading_error_deg)
+        log.write_raw(DriveCommand.TOPIC, t, cmd.encode())
         self.ticks += 1
 
     def zero(self, *, wall_s: float, source: str) -> None:
         """A zero Twist sent by the watchdog (``stale``) or on exit (``stop``)."""
-        t = self.clock.at_wall(wall_s)
+        if not self.clock.anchored:
+            self._early.append((wall_s, source))  # placed when the first scan sets the clock
+            return
+        self._write_zero(self.clock.at_wall(wall_s), source)
+
+    def _place_early(self, stamp_ns: int, wall_s: float) -> None:
+        """The zero Twists before the clock was set, back from ``stamp_ns`` at ``wall_s``."""
+        self.clock.anchor(stamp_ns, wall_s)
+        early, self._early = self._early, []
+        for at, source in early:
+            self._write_zero(self.clock.at_wall(at), source)
+
+    def _write_zero(self, t: int, source: str) -> None:
         self.log.write("/cmd_vel", t, msg.twist(t, 0.0, 0.0))
-        self.log.write_raw(
-            COMMAND_TOPIC,
-            t,
-            drive_command(t, (0.0, 0.0), source=source, sent=True, latency_ms=None, heading_error_deg=None),
-        )
+        self.log.write_raw(DriveCommand.TOPIC, t, DriveCommand(t, 0.0, 0.0, source, True).encode())
+
+    def close(self) -> None:
+        """A run without a scan: place its zero Twists on our epoch clock."""
+        if not self.clock.anchored:
+            self._place_early(time.time_ns(), time.monotonic())

@@ -37,6 +37,7 @@ from lfdfuse.log.codec import (
     keys_error,
     timestamp_ns,
 )
+from lfdfuse.log.command import DriveCommand
 from lfdfuse.log.stamps import stamp
 
 #: channels that ``segment`` adds (a contract)
@@ -482,8 +483,9 @@ def decode_authority(data: bytes) -> Authority:
     return Authority.decode(data)
 
 
-#: every ``/lfd/*`` message class, by topic
+#: every ``/lfd/*`` message class, by topic (``drive``'s :class:`~lfdfuse.log.command.DriveCommand` too)
 CODECS: dict[str, type[Codec]] = {
     c.TOPIC: c
     for c in (BehaviorRow, DemoHeading, Bac, SegmentMark, NetworkStep, FusedVector, NetworkEvent, Authority)
 }
+CODECS[DriveCommand.TOPIC] = DriveCommand

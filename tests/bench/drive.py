@@ -2,7 +2,7 @@
 
 Two robots, each its own process, so the server's threads do not share our interpreter:
 ``lfdfuse teleop --input foxglove`` (lfdfuse's JSON) and the bridge-like simulated robot of
-:mod:`lfdfuse.tools.bridge_sim` (CDR, ``ros2msg`` schemas, the laser mounted by tf, as
+:mod:`tests.support.bridge_sim` (CDR, ``ros2msg`` schemas, the laser mounted by tf, as
 ``foxglove_bridge`` streams it). ``drive`` runs the hand-written ``tee-left`` truth table
 against each in this process and records to a temporary MCAP, as a user's run would. One row
 per robot: ticks, latency p50 / p99 / max (ms), whether p99 meets the goal (< 10 ms), and the
@@ -51,7 +51,7 @@ def _robot(kind: str, seconds: float) -> tuple[subprocess.Popen[str], str]:
         cmd = [
             sys.executable,
             "-m",
-            "lfdfuse.tools.bridge_sim",
+            "tests.support.bridge_sim",
             "--encoding",
             "cdr",
             "--seconds",

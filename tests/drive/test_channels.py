@@ -4,9 +4,10 @@ from __future__ import annotations
 
 from rosbags.typesys import Stores, get_typestore
 
-from lfdfuse.drive.channels import Subscriptions, Topics
 from lfdfuse.drive.decode import Role
-from lfdfuse.drive.wire import ServerChannel
+from lfdfuse.drive.foxglove.channels import Subscriptions
+from lfdfuse.drive.foxglove.wire import ServerChannel
+from lfdfuse.drive.transport import Topics
 
 STORE = get_typestore(Stores.ROS2_HUMBLE)
 

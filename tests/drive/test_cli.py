@@ -9,8 +9,8 @@ import yaml
 from typer.testing import CliRunner
 
 from lfdfuse.cli.main import app
-from lfdfuse.tools.bridge_sim import BridgeSim
 from lfdfuse.world.model import load_world
+from tests.support.bridge_sim import BridgeSim
 
 runner = CliRunner()
 
@@ -50,6 +50,19 @@ def test_nobody_listening_is_a_clear_error(keep_left: Path, tmp_path: Path) -> N
     assert res.exit_code == 1
     _one_error_line(res.output, f"cannot connect to ws://127.0.0.1:{port}")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_nobody_listening_for_a_whole_duration_is_the_same_error(keep_left: Path, tmp_path: Path) -> None:
+    """A ``--duration`` that ends before any connection opened is no run: exit 1, no file."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    out = tmp_path / "d.mcap"
+    args = ["drive", str(keep_left), "--connect", f"ws://127.0.0.1:{port}", "--duration", "2", "-o", str(out)]
+    res = runner.invoke(app, args)
+    assert res.exit_code == 1
+    _one_error_line(res.output, f"cannot connect to ws://127.0.0.1:{port}")
+    assert "ticks" not in res.output and list(tmp_path.iterdir()) == []
 
 
 def test_a_table_the_robot_cannot_run_is_refused(keep_left: Path, tmp_path: Path) -> None:

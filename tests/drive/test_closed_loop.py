@@ -22,10 +22,10 @@ import pytest
 
 from lfdfuse.log.reader import iter_messages
 from lfdfuse.network.table import load_table
-from lfdfuse.tools.bridge_sim import BridgeSim
 from lfdfuse.world.model import load_world
 from tests.conftest import ROOT, mcap_check
 from tests.drive.conftest import in_thread, start_drive
+from tests.support.bridge_sim import BridgeSim
 
 EXE = shutil.which("lfdfuse", path=str(Path(sys.executable).parent)) or shutil.which("lfdfuse")
 

@@ -11,9 +11,10 @@ import orjson
 import pytest
 
 from lfdfuse.drive.core import DriveCore, Inputs, Skip, Tick, applicability, check_applicable
-from lfdfuse.drive.decode import LiveOdom, LiveTargets, LiveTwist, decoder_for
+from lfdfuse.drive.decode import LiveOdom, LiveTargets, LiveTwist
+from lfdfuse.drive.decoders import decoder_for
+from lfdfuse.drive.foxglove.wire import ServerChannel
 from lfdfuse.drive.safety import Limits
-from lfdfuse.drive.wire import ServerChannel
 from lfdfuse.errors import ConfigError
 from lfdfuse.log import messages as msg
 from lfdfuse.network.stepper import NetworkStepper

@@ -18,14 +18,13 @@ from lfdfuse.drive.decode import (
     LiveTf,
     LiveTwist,
     Role,
-    decoder_for,
-    role_of,
     twist_encoder,
 )
-from lfdfuse.drive.wire import ServerChannel
+from lfdfuse.drive.decoders import REGISTRY, decoder_for, json_message, register, role_of
+from lfdfuse.drive.foxglove.wire import ServerChannel
 from lfdfuse.log import messages as msg
 from lfdfuse.sim.sensors import LaserParams
-from lfdfuse.tools.bridge_sim import _tf, cdr_odom, cdr_scan, cdr_tf
+from tests.support.bridge_sim import _tf, cdr_odom, cdr_scan, cdr_tf
 
 STORE = get_typestore(Stores.ROS2_HUMBLE)
 
@@ -135,3 +134,28 @@ def test_malformed_payloads_raise_decode_error(name: str, encoding: str, payload
 def test_a_bad_schema_is_a_decode_error() -> None:
     with pytest.raises(DecodeError, match="ros2msg schema"):
         decoder_for(ServerChannel(1, "/scan", "cdr", "sensor_msgs/msg/LaserScan", "ros2msg", "flot32 ]["))
+
+
+def test_the_registry_holds_both_families_and_takes_a_new_type() -> None:
+    cdr_pairs = {k for k in REGISTRY if k[0] == "cdr"}
+    assert {name for _, name in cdr_pairs} == {
+        "sensor_msgs/msg/LaserScan",
+        "nav_msgs/msg/Odometry",
+        "tf2_msgs/msg/TFMessage",
+        "geometry_msgs/msg/Twist",
+        "geometry_msgs/msg/TwistStamped",
+    }
+    json_roles = {name: e.role for (enc, name), e in REGISTRY.items() if enc == "json"}
+    assert json_roles["foxglove.LaserScan"] is Role.SCAN and json_roles["lfdfuse.Twist"] is Role.CMD
+    assert len(json_roles) == 8
+    # a new message type is one register call: role_of and decoder_for know it at once
+    ch = ServerChannel(1, "/flat", "json", "test.FlatTwist", "jsonschema", "")
+    assert role_of(ch) is None
+    try:
+        register("json", "test.FlatTwist", Role.CMD, json_message(lambda m: LiveTwist(m["v"], m["w"])))
+        assert role_of(ch) is Role.CMD
+        assert decoder_for(ch)(b'{"v": 0.5, "w": -0.25}') == LiveTwist(0.5, -0.25)
+        with pytest.raises(DecodeError, match="undecodable test.FlatTwist"):
+            decoder_for(ch)(b'{"v": 0.5}')
+    finally:
+        del REGISTRY[("json", "test.FlatTwist")]

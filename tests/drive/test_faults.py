@@ -10,9 +10,9 @@ import time
 from pathlib import Path
 
 from lfdfuse.network.table import load_table
-from lfdfuse.tools.bridge_sim import BridgeSim
 from lfdfuse.world.model import load_world
 from tests.drive.conftest import in_thread, start_drive
+from tests.support.bridge_sim import BridgeSim
 
 SLACK_S = 0.25
 

@@ -7,7 +7,8 @@ import orjson
 from hypothesis import given
 from hypothesis import strategies as st
 
-from lfdfuse.drive.record import COMMAND_SCHEMA, LogClock, decode_drive_command, drive_command
+from lfdfuse.drive.record import LogClock
+from lfdfuse.log.command import DriveCommand
 from lfdfuse.log.schemas import schema
 
 
@@ -23,11 +24,14 @@ from lfdfuse.log.schemas import schema
 def test_drive_command_round_trip_and_schema(
     t: int, v: float, w: float, source: str, sent: bool, lat: float | None, err: float | None
 ) -> None:
-    data = drive_command(t, (v, w), source=source, sent=sent, latency_ms=lat, heading_error_deg=err)
+    data = DriveCommand(t, v, w, source, sent, lat, err).encode()
     msg = orjson.loads(data)
-    jsonschema.validate(msg, schema(COMMAND_SCHEMA))
-    back = decode_drive_command(msg)
-    assert back[2:] == (source, sent) and abs(back[0] - v) <= 1e-6 and abs(back[1] - w) <= 1e-6
+    jsonschema.validate(msg, schema(DriveCommand.SCHEMA))
+    back = DriveCommand.decode(data)
+    assert (back.t_ns, back.source, back.sent) == (t, source, sent)
+    assert abs(back.v_mps - v) <= 1e-6 and abs(back.omega_rps - w) <= 1e-6
+    assert (back.latency_ms is None) == (lat is None) and (back.heading_error_deg is None) == (err is None)
+    assert back.encode() == data
 
 
 @given(st.lists(st.tuples(st.booleans(), st.integers(-(10**12), 10**12), st.floats(0, 1e4)), max_size=60))

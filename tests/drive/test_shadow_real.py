@@ -24,9 +24,9 @@ from lfdfuse.log.reader import iter_messages
 from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.segment.read import read_segmented
 from lfdfuse.sources.importers.convert import import_log
-from lfdfuse.tools.bridge_sim import BagReplay
 from tests.conftest import SHARED, mcap_check
 from tests.drive.conftest import in_thread, start_drive
+from tests.support.bridge_sim import BagReplay
 
 BAG = SHARED / "realdata" / "ros2" / "macfirst_floor_take_2.mcap"
 

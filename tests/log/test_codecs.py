@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 from lfdfuse.log import lfd
 from lfdfuse.log import messages as msg
 from lfdfuse.log.codec import MessageError
+from lfdfuse.log.command import COMMAND_SOURCES, DRIVE_TOPICS, DriveCommand
 from lfdfuse.log.schemas import schema
 from lfdfuse.log.sensing import scan_geometry, stamp_of
 from lfdfuse.sim.sensors import Detection, ScanGeometry
@@ -99,6 +100,16 @@ MESSAGES = {
         st.sampled_from(lfd.HELP_REASONS),
     ),
     lfd.Authority: st.builds(lfd.Authority, T_NS, st.sampled_from(lfd.AUTHORITIES), st.text(max_size=20)),
+    DriveCommand: st.builds(
+        DriveCommand,
+        T_NS,
+        st.floats(-2, 2).map(lambda v: round(v, 6)),
+        st.floats(-3, 3).map(lambda v: round(v, 6)),
+        st.sampled_from(COMMAND_SOURCES),
+        st.booleans(),
+        st.none() | st.floats(0, 1e3).map(lambda v: round(v, 4)),
+        st.none() | st.floats(0, 180).map(lambda v: round(v, 4)),
+    ),
 }
 
 
@@ -130,7 +141,7 @@ def test_the_module_encoders_write_what_the_classes_write() -> None:
     assert help_ == lfd.NetworkEvent(t, "help", "go/red", 5, "unseen BAC")
     assert lfd.decode_authority(lfd.encode_authority(t, "person", "keyboard")).person
     assert not lfd.decode_authority(lfd.encode_authority(t, "network")).person
-    topics = {**lfd.SEGMENT_TOPICS, **lfd.EXECUTE_TOPICS, **lfd.CORRECTION_TOPICS}
+    topics = {**lfd.SEGMENT_TOPICS, **lfd.EXECUTE_TOPICS, **lfd.CORRECTION_TOPICS, **DRIVE_TOPICS}
     assert set(topics) == set(lfd.CODECS) | {"/lfd/overlay"}
     assert all(lfd.CODECS[tp].SCHEMA == s for tp, s in topics.items() if tp in lfd.CODECS)
 
@@ -189,6 +200,7 @@ SAMPLES = [
     lfd.FusedVector(7, 0.5, 0.5, {"avoid": 0.25, "wander": 0.75}),
     lfd.NetworkEvent(7, "help", "reach-red", 5, "not identifiable"),
     lfd.Authority(7, "person", "foxglove client 3"),
+    DriveCommand(7, 0.25, -0.5, "network", True, 1.25, 12.5),
 ]
 
 

@@ -137,6 +137,19 @@ class FoxgloveLive:
     def url(self) -> str:
         return f"ws://{self.host}:{self.port}"
 
+    def subscribed(self, topic: str) -> bool:
+        """Whether a client subscribes to ``topic``."""
+        cid = self._channels[topic].id()
+        lis = self._listener
+        with lis.lock:
+            return any(cid in ids for ids in lis.subscribers.values())
+
+    @property
+    def client_channels(self) -> int:
+        """Channels the clients advertised (to publish commands on)."""
+        with self._listener.lock:
+            return len(self._listener.channels)
+
     def app_url(self) -> str:
         return self._server.app_url() or ""
 

@@ -1,19 +1,21 @@
-"""Robots that speak like a ROS 2 ``foxglove_bridge``, for ``drive``'s tests and benchmark.
+"""Robots that speak the Foxglove WebSocket protocol, for ``drive``'s tests and benchmark.
 
-:class:`BridgeSim` is a Foxglove SDK server fed from the simulator. In ``cdr`` it advertises
-``/scan`` (``sensor_msgs/msg/LaserScan``, in a ``laser`` frame mounted with a yaw, as on a
-TurtleBot), ``/odom`` (``nav_msgs/msg/Odometry``), ``/tf`` and ``/tf_static``
-(``tf2_msgs/msg/TFMessage``) with ``ros2msg`` schemas and CDR payloads serialised by
-``rosbags``, and accepts a CDR or JSON ``geometry_msgs/msg/Twist`` on ``/cmd_vel``; in ``json``
-it streams what ``lfdfuse teleop --input foxglove`` streams. ``lockstep`` steps the simulator
-as soon as a command answers a scan (faster than real time, same closed loop); otherwise it
-runs at the robot's 10 Hz. Fault hooks: pause the scans, inject a payload, drop the server
-and bring it back on the same port.
+:class:`BridgeSim` is the simulator behind a Foxglove server. In ``cdr`` it is a Foxglove SDK
+server that speaks like a ROS 2 ``foxglove_bridge``: it advertises ``/scan``
+(``sensor_msgs/msg/LaserScan``, in a ``laser`` frame mounted with a yaw, as on a TurtleBot),
+``/odom`` (``nav_msgs/msg/Odometry``), ``/tf`` and ``/tf_static`` (``tf2_msgs/msg/TFMessage``)
+with ``ros2msg`` schemas and CDR payloads serialised by ``rosbags``, and accepts a CDR or JSON
+``geometry_msgs/msg/Twist`` on ``/cmd_vel``. In ``json`` it is ``lfdfuse teleop``'s own server
+(:class:`~lfdfuse.sources.teleop.foxglove_server.FoxgloveLive`), streaming what
+``teleop --input foxglove`` streams. ``lockstep`` steps the simulator as soon as a command
+answers a scan (faster than real time, same closed loop); otherwise it runs at the robot's
+10 Hz. Fault hooks (``cdr``): pause the scans, inject a payload, drop the server and bring it
+back on the same port.
 
 :class:`BagReplay` republishes a ROS 2 MCAP bag's CDR messages with their own schemas, paced
 by their log times (``speed`` × real time).
 
-Not part of the pipeline: a test rig (``tests/drive``, ``lfdfuse.tools.bench_drive``).
+Not part of the pipeline: a test rig (``tests/drive``, the ``drive`` benchmark).
 """
 
 from __future__ import annotations
@@ -29,19 +31,17 @@ from typing import Any
 
 import foxglove
 import numpy as np
-import orjson
 from foxglove import Channel, Context, Schema
 from foxglove.websocket import Capability, ChannelView, Client, ClientChannel, ServerListener
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-from lfdfuse.log import messages as msg
 from lfdfuse.log.reader import iter_raw
-from lfdfuse.log.schemas import schema_text
 from lfdfuse.sim.loop import side_beam_index
 from lfdfuse.sim.robot import Pose
 from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.sim.simulator import Observation, Simulator
-from lfdfuse.sources.teleop.inputs import parse_twist
+from lfdfuse.sources.teleop.foxglove_server import FoxgloveLive
+from lfdfuse.sources.teleop.inputs import TwistError, parse_twist
 from lfdfuse.world.model import World
 
 _STORE = get_typestore(Stores.ROS2_HUMBLE)
@@ -52,7 +52,6 @@ CDR_TOPICS = {
     "/tf": "tf2_msgs/msg/TFMessage",
     "/tf_static": "tf2_msgs/msg/TFMessage",
 }
-JSON_TOPICS = ("/scan", "/pose", "/tf", "/targets")
 
 
 @dataclass(frozen=True)
@@ -199,37 +198,32 @@ class BridgeSim:
         self.sim = Simulator(self.world, np.random.default_rng(self.seed), self.sensors)
         self.listener = _Listener()
         self.context = Context()
-        self._start_server()
-        if self.encoding == "cdr":
-            self.channels = {
-                t: Channel(
-                    t,
-                    schema=Schema(name=n, encoding="ros2msg", data=_STORE.generate_msgdef(n)[0].encode()),
-                    message_encoding="cdr",
-                    context=self.context,
-                )
-                for t, n in CDR_TOPICS.items()
-            }
-            if self.cmd_stamped:
-                n = "geometry_msgs/msg/TwistStamped"
-                self.channels["/cmd_vel"] = Channel(
-                    "/cmd_vel",
-                    schema=Schema(name=n, encoding="ros2msg", data=_STORE.generate_msgdef(n)[0].encode()),
-                    message_encoding="cdr",
-                    context=self.context,
-                )
-        else:
-            self.channels = {
-                t: Channel(
-                    t,
-                    schema=Schema(name=msg.TOPICS[t], encoding="jsonschema", data=schema_text(msg.TOPICS[t])),
-                    message_encoding="json",
-                    context=self.context,
-                )
-                for t in JSON_TOPICS
-            }
         self.tick = 0
         self.collisions = 0
+        self.live: FoxgloveLive | None = None
+        self.channels: dict[str, Channel] = {}
+        if self.encoding == "json":  # lfdfuse teleop's own server
+            self.live = FoxgloveLive(world=self.world, sensors=self.sensors, port=self.port)
+            self.port = self.live.port
+            return
+        self._start_server()
+        self.channels = {
+            t: Channel(
+                t,
+                schema=Schema(name=n, encoding="ros2msg", data=_STORE.generate_msgdef(n)[0].encode()),
+                message_encoding="cdr",
+                context=self.context,
+            )
+            for t, n in CDR_TOPICS.items()
+        }
+        if self.cmd_stamped:
+            n = "geometry_msgs/msg/TwistStamped"
+            self.channels["/cmd_vel"] = Channel(
+                "/cmd_vel",
+                schema=Schema(name=n, encoding="ros2msg", data=_STORE.generate_msgdef(n)[0].encode()),
+                message_encoding="cdr",
+                context=self.context,
+            )
 
     def _start_server(self) -> None:
         self.server = foxglove.start_server(
@@ -237,7 +231,7 @@ class BridgeSim:
             host="127.0.0.1",
             port=self.port,
             capabilities=[Capability.ClientPublish],
-            supported_encodings=["cdr", "json"] if self.encoding == "cdr" else ["json"],
+            supported_encodings=["cdr", "json"],
             server_listener=self.listener,
             context=self.context,
         )
@@ -249,6 +243,7 @@ class BridgeSim:
 
     def drop(self, down_s: float) -> None:
         """The connection drops: the server goes away for ``down_s`` and returns on the same port."""
+        assert self.live is None, "cdr only"
         self.server.stop()
         time.sleep(down_s)
         for _ in range(50):
@@ -260,40 +255,45 @@ class BridgeSim:
         raise RuntimeError("could not restart the server")
 
     def inject(self, topic: str, payload: bytes) -> None:
+        assert self.live is None, "cdr only"
         self.channels[topic].log(payload, log_time=self.tick * self.sim.dt_ns)
 
     def publish(self, obs: Observation) -> None:
         t, p, r = obs.t_ns, obs.pose, obs.reading
         geom = self.sensors.laser.geometry
-        if self.encoding == "cdr":
-            self.channels["/odom"].log(cdr_odom(t, p.x, p.y, p.theta), log_time=t)
-            tfs = [_tf(t, "odom", "base_link", p.x, p.y, p.theta)]
-            self.channels["/tf"].log(cdr_tf(tfs), log_time=t)
-            if obs.k % 10 == 0:
-                laser = _tf(t, "base_link", "laser", 0.1, 0.0, self.laser_yaw_rad)
-                self.channels["/tf_static"].log(cdr_tf([laser]), log_time=t)
-            if not self.scans_paused.is_set():
-                start = geom.start_rad - self.laser_yaw_rad
-                scan = cdr_scan(t, r.ranges_m, start, geom.increment_rad, geom.max_range_m, "laser")
-                self.channels["/scan"].log(scan, log_time=t)
-        else:
-            self.channels["/pose"].log(orjson.dumps(msg.pose_in_frame(t, p.x, p.y, p.theta)), log_time=t)
-            self.channels["/tf"].log(orjson.dumps(msg.frame_transform(t, p.x, p.y, p.theta)), log_time=t)
-            self.channels["/targets"].log(orjson.dumps(msg.target_detections(t, r.detections)), log_time=t)
-            if not self.scans_paused.is_set():
-                self.channels["/scan"].log(orjson.dumps(msg.laser_scan(t, r.ranges_m, geom)), log_time=t)
+        if self.live is not None:
+            if self.scans_paused.is_set():
+                raise NotImplementedError("json: teleop's server streams every scan")
+            self.live.record(obs, (0.0, 0.0))
+            return
+        self.channels["/odom"].log(cdr_odom(t, p.x, p.y, p.theta), log_time=t)
+        tfs = [_tf(t, "odom", "base_link", p.x, p.y, p.theta)]
+        self.channels["/tf"].log(cdr_tf(tfs), log_time=t)
+        if obs.k % 10 == 0:
+            laser = _tf(t, "base_link", "laser", 0.1, 0.0, self.laser_yaw_rad)
+            self.channels["/tf_static"].log(cdr_tf([laser]), log_time=t)
+        if not self.scans_paused.is_set():
+            start = geom.start_rad - self.laser_yaw_rad
+            scan = cdr_scan(t, r.ranges_m, start, geom.increment_rad, geom.max_range_m, "laser")
+            self.channels["/scan"].log(scan, log_time=t)
 
     def wait_for_subscriber(self, timeout_s: float = 10.0, *, publisher: bool = True) -> bool:
         """Wait until a client subscribed to ``/scan`` (and, with ``publisher``, advertised a channel)."""
         end = time.monotonic() + timeout_s
         while time.monotonic() < end:
-            with self.listener.lock:
-                if "/scan" in self.listener.subscribed and (self.listener.channels or not publisher):
+            if self.live is not None:
+                if self.live.subscribed("/scan") and (self.live.client_channels or not publisher):
                     return True
+            else:
+                with self.listener.lock:
+                    if "/scan" in self.listener.subscribed and (self.listener.channels or not publisher):
+                        return True
             time.sleep(0.01)
         return False
 
     def _take(self, timeout_s: float) -> list[tuple[float, float, float, str]]:
+        if self.live is not None:
+            return self._take_live(self.live, timeout_s)
         got = []
         try:
             got.append(self.listener.commands.get(timeout=timeout_s))
@@ -302,6 +302,20 @@ class BridgeSim:
         except queue.Empty:
             pass
         return got
+
+    def _take_live(self, live: FoxgloveLive, timeout_s: float) -> list[tuple[float, float, float, str]]:
+        """The commands teleop's server queued (it is polled, as teleop polls it each period)."""
+        end = time.monotonic() + timeout_s
+        while True:
+            got = []
+            for inp in live.poll(0.0):
+                try:
+                    got.append((time.monotonic(), *parse_twist(inp.text.encode()), "json"))
+                except TwistError:
+                    self.listener.bad += 1
+            if got or time.monotonic() >= end:
+                return got
+            time.sleep(0.0005)
 
     def run(self, seconds: float) -> None:
         """Simulate ``seconds`` of robot time (or until :attr:`stopped` is set)."""
@@ -332,6 +346,9 @@ class BridgeSim:
 
     def close(self) -> None:
         self.stopped.set()
+        if self.live is not None:
+            self.live.close()
+            return
         for ch in self.channels.values():
             ch.close()
         self.server.stop()

@@ -4,23 +4,17 @@ Pure bookkeeping over the ``advertise`` / ``unadvertise`` messages of one connec
 on ``--scan``; odometry on ``--odom``, else the first odometry-like channel (lfdfuse's own server
 calls it ``/pose``); every tf channel (``/tf``, ``/tf_static``); a camera's targets; and in
 ``--shadow`` the robot's own command on ``--cmd``. Channels whose encoding and schema have no
-decoder are left alone; a schema that does not parse is a warning, not an error.
+decoder in :mod:`lfdfuse.drive.decoders` are left alone; a schema that does not parse is a warning, not an error.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from lfdfuse.drive.decode import DecodeError, Decoder, Role, decoder_for, role_of
-from lfdfuse.drive.wire import ServerChannel
-
-
-@dataclass(frozen=True)
-class Topics:
-    scan: str = "/scan"
-    odom: str = "/odom"
-    cmd: str = "/cmd_vel"
-    shadow: bool = False
+from lfdfuse.drive.decode import DecodeError, Decoder, Role
+from lfdfuse.drive.decoders import decoder_for, role_of
+from lfdfuse.drive.foxglove.wire import ServerChannel
+from lfdfuse.drive.transport import Topics
 
 
 @dataclass(frozen=True)
