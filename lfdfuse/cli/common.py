@@ -103,9 +103,16 @@ def finite(value: float | None) -> float | None:
     return value
 
 
-def seed_option(help: str) -> Any:
+def positive(value: float | None) -> float | None:
+    """A typer callback for a limit: finite and above zero (a limit of 0 or less would be dropped)."""
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise typer.BadParameter(f"{value} is not a positive number")
+    return value
+
+
+def seed_option(help: str, default: int = 0) -> Any:
     """``--seed``: an integer from 0 to 2^63-1."""
-    return typer.Option(0, "--seed", min=0, max=MAX_SEED, help=help)
+    return typer.Option(default, "--seed", min=0, max=MAX_SEED, help=help)
 
 
 def duration_option(default: float | None, *names: str, help: str) -> Any:

@@ -43,8 +43,11 @@ def execute_cmd(
     stop_on_collision: bool = typer.Option(
         False, "--stop-on-collision", help="End the run at the first collision."
     ),
-    out: Path = typer.Option(
-        Path("run.mcap"), "--out", "-o", help="Run log (MCAP) with the /lfd/* channels and an overlay."
+    out: Path | None = typer.Option(
+        None,
+        "--out",
+        "-o",
+        help="Run log (MCAP) with the /lfd/* channels and an overlay (default: run.mcap; not with --starts).",
     ),
     report: Path | None = typer.Option(None, "--report", help="Write the JSON report here."),
     starts: str | None = typer.Option(
@@ -65,6 +68,9 @@ def execute_cmd(
       lfdfuse execute fusion.yaml --world tee --start 1,9,0 --max-time 120
       lfdfuse execute task.yaml --starts 10 --workers 2 --report rate.json
     """
+    if starts is not None and out is not None:
+        raise typer.BadParameter("--starts keeps no run logs: drop -o, or run from one --start to get a log")
+    out = out or Path("run.mcap")
     check_outputs([out, report], [table, existing(world)])
     if starts is not None:
         one_executor(workers, scheduler)

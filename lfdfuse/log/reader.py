@@ -84,7 +84,7 @@ def check_log_file(path: str | Path) -> Path:
 
 #: largest chunk we decompress (writers use ~1-4 MB; the size is allocated before decompressing)
 MAX_CHUNK_BYTES = 2**30
-_CHUNK, _DATA_END, _FOOTER = 0x06, 0x0F, 0x02
+_HEADER, _CHUNK, _DATA_END, _FOOTER = 0x01, 0x06, 0x0F, 0x02
 
 
 def _check_chunks(p: Path, stream: _Bounded) -> None:
@@ -98,6 +98,10 @@ def _check_chunks(p: Path, stream: _Bounded) -> None:
         if len(head) < 9:
             break
         opcode, length = struct.unpack_from("<BQ", head)
+        if pos == len(MCAP_MAGIC) and opcode != _HEADER:
+            raise LogError(f"{p}: not a readable MCAP file (no header record after the magic bytes)")
+        if opcode == 0:
+            raise LogError(f"{p}: not a readable MCAP file (a record at byte {pos} has opcode 0)")
         if opcode in (_DATA_END, _FOOTER):
             break
         if opcode == _CHUNK and len(head) == 33:
