@@ -9,11 +9,13 @@ import typer
 from lfdfuse.cli.app import WORLD_HELP, app
 from lfdfuse.cli.common import (
     check_outputs,
+    checked,
     duration_option,
     existing,
     progress_bar,
     seed_option,
     sensor_noise_option,
+    start_option,
     user_errors,
 )
 from lfdfuse.cli.execute_starts import execute_starts, starts_of
@@ -34,9 +36,7 @@ def execute_cmd(
         ..., help="A fusion table YAML (from `lfdfuse estimate`, or written by hand)."
     ),
     world: str = typer.Option(DEFAULT_WORLD, "--world", "-w", help=WORLD_HELP),
-    start: str | None = typer.Option(
-        None, "--start", help="Start pose X,Y,THETA (m, m, rad); default: the world's."
-    ),
+    start: str | None = start_option(),
     max_time: float = duration_option(300.0, "--max-time", help="Stop after this many simulated seconds."),
     seed: int = seed_option("Seed of every random draw (sensor noise)."),
     noise: float = sensor_noise_option(),
@@ -53,6 +53,7 @@ def execute_cmd(
     starts: str | None = typer.Option(
         None,
         "--starts",
+        callback=checked(lambda text: starts_of(text)),
         help="N: run from N starts perturbed ±0.5 m, ±20° around --start (seeded), or a YAML file listing"
         " poses (X,Y,THETA each); prints completed/N with a 95 % interval (no run logs are kept).",
     ),

@@ -61,3 +61,22 @@ def test_zeros_after_the_magic_are_refused_at_once(tmp_path: Path, after: bytes)
     code, out = _in(tmp_path, ["segment", "z.mcap"])
     assert code == 1 and "not a readable MCAP file" in out, out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["z.mcap"]
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["segment", "x.mcap", "--lag", "5"],
+        ["segment", "x.mcap", "--lag", "abc"],
+        ["simulate", "-o", "s.mcap", "--start", "1,2"],
+        ["execute", "t.yaml", "--start", "1,2,nan"],
+        ["execute", "t.yaml", "--starts", "0"],
+        ["teleop", "--start", "x"],
+    ],
+)
+def test_a_value_the_option_does_not_accept_is_a_usage_error(tmp_path: Path, args: list[str]) -> None:
+    """Exit 2 (as click's own ranges), the option named, before any input is read or output made."""
+    code, out = _in(tmp_path, args)
+    assert code == 2, out
+    assert args[-2] in out
+    assert list(tmp_path.iterdir()) == []
