@@ -129,6 +129,15 @@ def _open(path: str | Path) -> Any:
             else "; other robot logs go through `lfdfuse import`"
         )
         raise LogError(f"{p}: not a readable MCAP file (it does not start like one){hint}")
+    size = stream._size
+    stream.seek(max(len(MCAP_MAGIC), size - len(MCAP_MAGIC)))
+    if size < 2 * len(MCAP_MAGIC) or stream.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
+        stream.close()
+        raise LogError(
+            f"{p}: truncated MCAP file: it ends at byte {size} without the closing magic bytes (cut short"
+            " while written or copied): copy it again, or keep its readable part with `mcap recover`"
+        )
+    stream.seek(len(MCAP_MAGIC))
     try:
         _check_chunks(p, stream)
     except BaseException:

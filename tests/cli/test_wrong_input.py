@@ -57,7 +57,7 @@ def test_execute_refuses_a_log_it_would_not_write(tmp_path: Path) -> None:
 def test_zeros_after_the_magic_are_refused_at_once(tmp_path: Path, after: bytes) -> None:
     """A file of zeros behind the magic bytes (and behind a header) is refused on its first record."""
     bad = tmp_path / "z.mcap"
-    bad.write_bytes(MCAP_MAGIC + after + bytes(8 * 2**20))
+    bad.write_bytes(MCAP_MAGIC + after + bytes(8 * 2**20) + MCAP_MAGIC)
     code, out = _in(tmp_path, ["segment", "z.mcap"])
     assert code == 1 and "not a readable MCAP file" in out, out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["z.mcap"]
@@ -80,3 +80,21 @@ def test_a_value_the_option_does_not_accept_is_a_usage_error(tmp_path: Path, arg
     assert code == 2, out
     assert args[-2] in out
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("keep", [0.1, 0.5, 0.99])
+def test_a_cut_mcap_says_it_is_truncated_and_where(tmp_path: Path, keep: float) -> None:
+    whole = (Path(__file__).resolve().parents[2] / "sample_logs" / "keep-left-building.mcap").read_bytes()
+    cut = whole[: int(keep * len(whole))]
+    (tmp_path / "c.mcap").write_bytes(cut)
+    for cmd in (["inspect", "c.mcap"], ["segment", "c.mcap"]):
+        code, out = _in(tmp_path, cmd)
+        assert code == 1 and f"truncated MCAP file: it ends at byte {len(cut)}" in out, out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.mcap"]
+
+
+@pytest.mark.parametrize("cmd", [["inspect", "."], ["inspect", "sub"], ["plot", "sub", "-o", "p.png"]])
+def test_a_folder_that_is_not_a_bag_is_named_as_a_folder(tmp_path: Path, cmd: list[str]) -> None:
+    (tmp_path / "sub").mkdir()
+    code, out = _in(tmp_path, cmd)
+    assert code == 1 and "is a folder" in out and "import" not in out, out
