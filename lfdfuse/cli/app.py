@@ -92,5 +92,8 @@ def finish(typer_app: typer.Typer) -> None:
 
 
 def default_out(src: Path, suffix: str) -> Path:
+    """``IN`` with ``suffix`` before ``.mcap``, beside it (``.`` and ``..`` are named by their folder)."""
+    if src.name in ("", ".", ".."):
+        src = src.resolve()
     name = src.name[:-5] if src.name.endswith(".mcap") else src.name
     return src.with_name(f"{name}{suffix}.mcap")

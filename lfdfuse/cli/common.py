@@ -103,9 +103,43 @@ def finite(value: float | None) -> float | None:
     return value
 
 
-def seed_option(help: str) -> Any:
+def positive(value: float | None) -> float | None:
+    """A typer callback for a limit: finite and above zero (a limit of 0 or less would be dropped)."""
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise typer.BadParameter(f"{value} is not a positive number")
+    return value
+
+
+def checked(parse: Callable[[str], object]) -> Callable[[str | None], str | None]:
+    """A typer callback that runs ``parse`` on the option's text as it is read, so a value outside
+    what the option accepts is a usage error (exit 2) before anything runs, not a failure later."""
+
+    def check(text: str | None) -> str | None:
+        if text is not None:
+            try:
+                parse(text)
+            except (ConfigError, ValueError) as exc:
+                raise typer.BadParameter(str(exc)) from None
+        return text
+
+    return check
+
+
+def start_option() -> Any:
+    """``--start X,Y,THETA``: the start pose, checked as it is read."""
+    from lfdfuse.sim.robot import Pose
+
+    return typer.Option(
+        None,
+        "--start",
+        callback=checked(Pose.parse),
+        help="Start pose X,Y,THETA (m, m, rad); default: the world's.",
+    )
+
+
+def seed_option(help: str, default: int = 0) -> Any:
     """``--seed``: an integer from 0 to 2^63-1."""
-    return typer.Option(0, "--seed", min=0, max=MAX_SEED, help=help)
+    return typer.Option(default, "--seed", min=0, max=MAX_SEED, help=help)
 
 
 def duration_option(default: float | None, *names: str, help: str) -> Any:

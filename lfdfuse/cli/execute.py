@@ -9,11 +9,13 @@ import typer
 from lfdfuse.cli.app import WORLD_HELP, app
 from lfdfuse.cli.common import (
     check_outputs,
+    checked,
     duration_option,
     existing,
     progress_bar,
     seed_option,
     sensor_noise_option,
+    start_option,
     user_errors,
 )
 from lfdfuse.cli.execute_starts import execute_starts, starts_of
@@ -34,22 +36,24 @@ def execute_cmd(
         ..., help="A fusion table YAML (from `lfdfuse estimate`, or written by hand)."
     ),
     world: str = typer.Option(DEFAULT_WORLD, "--world", "-w", help=WORLD_HELP),
-    start: str | None = typer.Option(
-        None, "--start", help="Start pose X,Y,THETA (m, m, rad); default: the world's."
-    ),
+    start: str | None = start_option(),
     max_time: float = duration_option(300.0, "--max-time", help="Stop after this many simulated seconds."),
     seed: int = seed_option("Seed of every random draw (sensor noise)."),
     noise: float = sensor_noise_option(),
     stop_on_collision: bool = typer.Option(
         False, "--stop-on-collision", help="End the run at the first collision."
     ),
-    out: Path = typer.Option(
-        Path("run.mcap"), "--out", "-o", help="Run log (MCAP) with the /lfd/* channels and an overlay."
+    out: Path | None = typer.Option(
+        None,
+        "--out",
+        "-o",
+        help="Run log (MCAP) with the /lfd/* channels and an overlay (default: run.mcap; not with --starts).",
     ),
     report: Path | None = typer.Option(None, "--report", help="Write the JSON report here."),
     starts: str | None = typer.Option(
         None,
         "--starts",
+        callback=checked(lambda text: starts_of(text)),
         help="N: run from N starts perturbed ±0.5 m, ±20° around --start (seeded), or a YAML file listing"
         " poses (X,Y,THETA each); prints completed/N with a 95 % interval (no run logs are kept).",
     ),
@@ -65,6 +69,9 @@ def execute_cmd(
       lfdfuse execute fusion.yaml --world tee --start 1,9,0 --max-time 120
       lfdfuse execute task.yaml --starts 10 --workers 2 --report rate.json
     """
+    if starts is not None and out is not None:
+        raise typer.BadParameter("--starts keeps no run logs: drop -o, or run from one --start to get a log")
+    out = out or Path("run.mcap")
     check_outputs([out, report], [table, existing(world)])
     if starts is not None:
         one_executor(workers, scheduler)

@@ -11,14 +11,20 @@ from rich.table import Table
 
 from lfdfuse.cli.common import console
 from lfdfuse.cli.parallel import follow, print_wide
-from lfdfuse.execute.starts import StartsOptions, StartsResult, run_starts
+from lfdfuse.errors import ConfigError
+from lfdfuse.execute.starts import MAX_STARTS, StartsOptions, StartsResult, run_starts
 from lfdfuse.files import write_text_atomic
 from lfdfuse.parallel import open_executor
 
 
 def starts_of(text: str) -> int | Path:
     """``--starts 10`` (perturbed starts) or ``--starts poses.yaml`` (a file of poses)."""
-    return int(text) if text.strip().isdigit() else Path(text)
+    if not text.strip().lstrip("+-").isdigit():
+        return Path(text)
+    n = int(text)
+    if not 1 <= n <= MAX_STARTS:
+        raise ConfigError(f"--starts must be from 1 to {MAX_STARTS} starts, got {n}")
+    return n
 
 
 def _styles(run: dict[str, Any]) -> str:

@@ -10,7 +10,7 @@ import typer
 from rich.console import Console
 
 from lfdfuse.cli.app import app
-from lfdfuse.cli.common import console, user_errors
+from lfdfuse.cli.common import console, positive, user_errors
 from lfdfuse.sources.importers.convert import CmdFrom, ImportOptions, ImportSummary, import_log
 from lfdfuse.sources.importers.goals import read_goals
 from lfdfuse.sources.importers.records import Mount, TopicChoice
@@ -92,10 +92,10 @@ def import_cmd(
         None, "--laser-mount", help="Laser mounting X,Y,YAW on the robot (m, m, rad); default: from the log."
     ),
     v_max: float | None = typer.Option(
-        None, "--v-max", help="Robot speed limit (m/s); default: from the log."
+        None, "--v-max", callback=positive, help="Robot speed limit (m/s); default: from the log."
     ),
     omega_max: float | None = typer.Option(
-        None, "--omega-max", help="Robot turn-rate limit (rad/s); default: from the log."
+        None, "--omega-max", callback=positive, help="Robot turn-rate limit (rad/s); default: from the log."
     ),
     teacher: Driver = typer.Option(Driver.UNKNOWN, "--teacher", help="Who drove (provenance)."),
 ) -> None:

@@ -48,6 +48,11 @@ def inspect(
     if file.suffix in (".yaml", ".yml"):
         _inspect_yaml(file)
         return
+    if file.is_dir() and not (file / "metadata.yaml").is_file():
+        raise ConfigError(
+            f"{file} is a folder without a rosbag2 metadata.yaml: inspect reads an MCAP file, a bag,"
+            " a rosbag2 folder or a YAML file"
+        )
     fmt = robot_format(file)
     refused = None
     if fmt is not None:

@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from lfdfuse.cli.app import app
-from lfdfuse.cli.common import console, err_console, user_errors
+from lfdfuse.cli.common import console, err_console, seed_option, user_errors
 from lfdfuse.cli.parallel import one_executor, scheduler_option, workers_option
 from lfdfuse.parallel import open_executor
 
@@ -17,7 +17,7 @@ from lfdfuse.parallel import open_executor
 @user_errors
 def report_cmd(
     out: Path = typer.Option(Path("paper-report"), "--out", "-o", help="Folder of the report (created)."),
-    seed: int = typer.Option(1, "--seed", help="Seed of every demonstration, estimate and run."),
+    seed: int = seed_option("Seed of every demonstration, estimate and run.", default=1),
     quick: bool = typer.Option(
         False,
         "--quick",

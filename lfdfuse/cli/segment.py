@@ -8,10 +8,11 @@ import typer
 
 from lfdfuse.behaviors.primitives import DEFAULT_PRESET, PRESETS
 from lfdfuse.cli.app import app, default_out
-from lfdfuse.cli.common import check_outputs, console, progress_bar, user_errors
+from lfdfuse.cli.common import check_outputs, checked, console, progress_bar, user_errors
 from lfdfuse.cli.render import print_segments
 from lfdfuse.errors import ConfigError
 from lfdfuse.segment.commands import CommandChoice
+from lfdfuse.segment.lag import CANDIDATE_LAGS_S
 from lfdfuse.segment.pipeline import segment_file
 
 
@@ -28,6 +29,7 @@ def segment_cmd(
     lag: str = typer.Option(
         "auto",
         "--lag",
+        callback=checked(lambda text: parse_lag(text)),
         help="Pair each scan with the command issued this many seconds later (reaction lag); auto: the best-explaining lag.",
     ),
     commands: CommandChoice = typer.Option(
@@ -76,6 +78,10 @@ def parse_lag(text: str) -> float | None:
     if text.strip().lower() == "auto":
         return None
     try:
-        return float(text)
+        lag_s = float(text)
     except ValueError:
         raise ConfigError(f"--lag must be a number of seconds or auto, got {text[:40]!r}") from None
+    lo, hi = min(CANDIDATE_LAGS_S), max(CANDIDATE_LAGS_S)
+    if not lo <= lag_s <= hi:
+        raise ConfigError(f"--lag {text[:40]} is outside the {lo:g}–{hi:g} s the lag search covers")
+    return lag_s

@@ -17,6 +17,7 @@ from lfdfuse.cli.common import (
     progress_bar,
     seed_option,
     sensor_noise_option,
+    start_option,
     user_errors,
 )
 from lfdfuse.cli.render import print_run
@@ -42,9 +43,7 @@ def simulate_cmd(
     ),
     duration: float = duration_option(300.0, "--duration", "-d", help="Maximum simulated time in seconds."),
     seed: int = seed_option("Seed of every random draw (teacher noise, sensor noise)."),
-    start: str | None = typer.Option(
-        None, "--start", help="Start pose X,Y,THETA (m, m, rad); default: the world's."
-    ),
+    start: str | None = start_option(),
     noise: float = sensor_noise_option(),
     heading_noise: float | None = typer.Option(
         None,

@@ -34,6 +34,7 @@ from lfdfuse.cli.common import (
     existing,
     finite,
     seed_option,
+    start_option,
     user_errors,
 )
 from lfdfuse.cli.render import print_report, print_run
@@ -106,9 +107,7 @@ def teleop_cmd(
         help="Foxglove: stop the robot when no client command came for this many seconds.",
     ),
     seed: int = seed_option("Seed of every random draw (sensor noise)."),
-    start: str | None = typer.Option(
-        None, "--start", help="Start pose X,Y,THETA (m, m, rad); default: the world's."
-    ),
+    start: str | None = start_option(),
     out: Path = typer.Option(Path("demo.mcap"), "--out", "-o", help="Output MCAP file."),
     table: Path | None = typer.Option(
         None,

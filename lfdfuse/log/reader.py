@@ -84,7 +84,7 @@ def check_log_file(path: str | Path) -> Path:
 
 #: largest chunk we decompress (writers use ~1-4 MB; the size is allocated before decompressing)
 MAX_CHUNK_BYTES = 2**30
-_CHUNK, _DATA_END, _FOOTER = 0x06, 0x0F, 0x02
+_HEADER, _CHUNK, _DATA_END, _FOOTER = 0x01, 0x06, 0x0F, 0x02
 
 
 def _check_chunks(p: Path, stream: _Bounded) -> None:
@@ -98,6 +98,10 @@ def _check_chunks(p: Path, stream: _Bounded) -> None:
         if len(head) < 9:
             break
         opcode, length = struct.unpack_from("<BQ", head)
+        if pos == len(MCAP_MAGIC) and opcode != _HEADER:
+            raise LogError(f"{p}: not a readable MCAP file (no header record after the magic bytes)")
+        if opcode == 0:
+            raise LogError(f"{p}: not a readable MCAP file (a record at byte {pos} has opcode 0)")
         if opcode in (_DATA_END, _FOOTER):
             break
         if opcode == _CHUNK and len(head) == 33:
@@ -125,6 +129,15 @@ def _open(path: str | Path) -> Any:
             else "; other robot logs go through `lfdfuse import`"
         )
         raise LogError(f"{p}: not a readable MCAP file (it does not start like one){hint}")
+    size = stream._size
+    stream.seek(max(len(MCAP_MAGIC), size - len(MCAP_MAGIC)))
+    if size < 2 * len(MCAP_MAGIC) or stream.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
+        stream.close()
+        raise LogError(
+            f"{p}: truncated MCAP file: it ends at byte {size} without the closing magic bytes (cut short"
+            " while written or copied): copy it again, or keep its readable part with `mcap recover`"
+        )
+    stream.seek(len(MCAP_MAGIC))
     try:
         _check_chunks(p, stream)
     except BaseException:

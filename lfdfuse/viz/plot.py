@@ -136,6 +136,8 @@ def plot_file(
         raise ConfigError(f"unknown whiskers {spread!r} (valid: std, trial_std)")
     figure_format(out)
     p = Path(src)
+    if p.is_dir():
+        raise LfdError(f"{p} is a folder: plot draws one MCAP log or one fusion table")
     if not p.is_file():
         raise LfdError(f"no such file: {p}")
     if Path(out).resolve() == p.resolve():
