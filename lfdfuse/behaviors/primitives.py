@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.sim.sensors import Detection, ScanGeometry
+from lfdfuse.robot.readings import Detection, ScanGeometry
 
 BASE_BEHAVIORS = (
     "avoid",

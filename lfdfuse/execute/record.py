@@ -15,7 +15,7 @@ from lfdfuse.log import messages as msg
 from lfdfuse.log.writer import LogWriter
 from lfdfuse.network.driver import NetworkDriver
 from lfdfuse.network.runtime import step_name_of
-from lfdfuse.sim.simulator import Observation
+from lfdfuse.robot.readings import Observation
 
 PALETTE = [
     (0.9, 0.3, 0.2),

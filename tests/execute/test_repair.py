@@ -29,10 +29,10 @@ from lfdfuse.execute.repair import (
 )
 from lfdfuse.log.reader import read_run
 from lfdfuse.network.table import FusionTable
+from lfdfuse.robot.readings import ScanGeometry
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
 from lfdfuse.segment.read import read_segmented
 from lfdfuse.segment.track import LandmarkTrack, OpeningCue
-from lfdfuse.sim.sensors import ScanGeometry
 from lfdfuse.world.generate import generate_offroute
 
 GEOM = ScanGeometry(-math.pi / 2, math.pi / 2, 3, 8.0)

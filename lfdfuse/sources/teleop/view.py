@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lfdfuse.sim.robot import Pose
-from lfdfuse.sim.sensors import ScanGeometry
+from lfdfuse.robot.pose import Pose
+from lfdfuse.robot.readings import ScanGeometry
 from lfdfuse.world.model import World
 
 WALL, LASER, TRAIL = "#", "*", "·"
