@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lfdfuse.robot.limits import stated_limits
@@ -21,9 +21,14 @@ def test_a_limit_not_stated_or_not_usable_is_none() -> None:
         assert stated_limits({"v_max_mps": bad, "omega_max_rps": "0.5"}) == (None, 0.5), bad
 
 
+TEXTS = st.sampled_from(["0.4", "-1", "0", "1e300", "1e-320", "nan", "-inf", " 2 ", "0x1p-2", "fast", ""])
+
+
+@settings(max_examples=200, deadline=None)
 @given(
     st.dictionaries(
-        st.sampled_from(["v_max_mps", "omega_max_rps", "other"]), st.one_of(st.text(), st.floats())
+        st.sampled_from(["v_max_mps", "omega_max_rps", "other"]),
+        st.one_of(TEXTS, st.floats(), st.integers(), st.none(), st.booleans()),
     )
 )
 def test_a_stated_limit_is_positive_and_finite(provenance: dict[str, object]) -> None:

@@ -40,7 +40,7 @@ def _transform(x: float, y: float, z: float, rot: Rotation) -> SimpleNamespace:
 def test_a_planar_mount_round_trips(x: float, y: float, z: float, yaw: float, flipped: bool) -> None:
     rot = Rotation.from_euler("ZYX", [yaw, 0.0, math.pi if flipped else 0.0])
     m = transform_matrix(_transform(x, y, z, rot))
-    np.testing.assert_allclose(m[:3, :3], rot.astransform_matrix(), atol=1e-12)
+    np.testing.assert_allclose(m[:3, :3], rot.as_matrix(), atol=1e-12)
     mount = mount_of(m)
     assert mount.flipped == flipped
     assert math.isclose(mount.x_m, x, abs_tol=1e-12) and math.isclose(mount.y_m, y, abs_tol=1e-12)
