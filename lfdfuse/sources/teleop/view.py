@@ -1,6 +1,6 @@
 """The top-down view of a teleop run as a character grid (the terminal shows it; this draws it).
 
-Pure: a world, a :class:`~lfdfuse.sim.robot.Pose`, a scan and a trail in; lines of text out.
+Pure: a world, a :class:`~lfdfuse.robot.pose.Pose`, a scan and a trail in; lines of text out.
 A character cell is twice as tall as it is wide, like a terminal's. The whole map is shown
 when it fits at a useful scale, otherwise a window that follows the robot.
 
