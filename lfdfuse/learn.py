@@ -29,11 +29,11 @@ from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.log.reader import Run
 from lfdfuse.network.table import FusionTable
 from lfdfuse.progress import Progress, part
+from lfdfuse.robot.pose import Pose
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
 from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.segment.read import SegmentedRun, read_segmented, read_segmented_and_run
 from lfdfuse.segment.track import LandmarkTrack
-from lfdfuse.sim.robot import Pose
 from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import Leg
 from lfdfuse.world.model import World

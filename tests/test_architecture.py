@@ -281,3 +281,129 @@ def test_viz_imports_no_stage() -> None:
         if any(dep == s or dep.startswith(s + ".") for s in stages)
     )
     assert not bad, "viz/ imports stages:\n  " + "\n  ".join(bad)
+
+
+# --- the floors: every arrow between stages points down ----------------------------------------
+
+#: the stages of lfdfuse/ (top-level modules and subpackages), bottom floor first (DESIGN §14).
+#: A stage imports only stages on lower floors; stages on one floor know nothing of each other.
+LAYERS: tuple[tuple[str, ...], ...] = (
+    ("lfdfuse", "errors", "progress"),  # the package root (its version), the error hierarchy
+    ("files", "validate", "parallel"),
+    ("robot", "control"),  # the types every stage shares and the ROS conversion; vector ↔ command
+    ("world",),
+    ("sim",),
+    ("behaviors",),
+    ("log",),
+    ("network",),
+    ("sources",),
+    ("segment",),
+    ("estimate",),
+    ("execute",),
+    ("drive", "learn"),
+    ("evaluate",),
+    ("viz", "tools"),
+    ("cli",),
+    ("__main__",),
+)
+
+
+def _stage(module: str) -> str:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else parts[0]
+
+
+def test_every_stage_sits_on_one_floor() -> None:
+    floors = [s for floor in LAYERS for s in floor]
+    assert len(floors) == len(set(floors)), "a stage on two floors"
+    unplaced = sorted({_stage(m) for m in _import_graph()} - set(floors))
+    assert not unplaced, f"stages on no floor of LAYERS (place them): {unplaced}"
+
+
+def test_no_upward_or_sideways_arrows() -> None:
+    """Data flows one way: a stage imports only stages on lower floors."""
+    floor = {s: i for i, stages in enumerate(LAYERS) for s in stages}
+    bad = sorted(
+        f"{m} imports {dep}"
+        for m, deps in _import_graph().items()
+        for dep in deps
+        if _stage(m) != _stage(dep) and floor.get(_stage(dep), 0) >= floor.get(_stage(m), 0)
+    )
+    assert not bad, "arrows that do not point down:\n  " + "\n  ".join(bad)
+
+
+# --- the robot layer: one home for the types every stage shares --------------------------------
+
+#: the shared robot types and conversions, by the robot/ module that defines them
+ROBOT_NAMES = {
+    "Pose": "lfdfuse.robot.pose",
+    "ScanGeometry": "lfdfuse.robot.readings",
+    "Detection": "lfdfuse.robot.readings",
+    "Reading": "lfdfuse.robot.readings",
+    "Observation": "lfdfuse.robot.readings",
+    "ScanRecord": "lfdfuse.robot.records",
+    "CommandRecord": "lfdfuse.robot.records",
+    "PoseRecord": "lfdfuse.robot.records",
+    "no_return": "lfdfuse.robot.records",
+    "same_geometry": "lfdfuse.robot.records",
+    "Mount": "lfdfuse.robot.mount",
+    "mount_of": "lfdfuse.robot.mount",
+    "base_geometry": "lfdfuse.robot.mount",
+    "quaternion_yaw": "lfdfuse.robot.ros",
+    "quaternion_matrix": "lfdfuse.robot.ros",
+    "transform_matrix": "lfdfuse.robot.ros",
+    "laser_mount": "lfdfuse.robot.ros",
+    "stated_limits": "lfdfuse.robot.limits",
+}
+
+
+def test_the_robot_layer_sits_on_the_error_hierarchy_alone() -> None:
+    bad = sorted(
+        f"{m} imports {dep}"
+        for m, deps in _import_graph().items()
+        if _stage(m) == "robot"
+        for dep in deps
+        if _stage(dep) not in ("robot", "errors")
+    )
+    assert not bad, "robot/ must not know a stage:\n  " + "\n  ".join(bad)
+
+
+def test_shared_robot_types_live_in_robot_alone() -> None:
+    """Each is defined once, in robot/, and imported from there: not from the simulator or an
+    importer that happens to use it (no re-export), and no second copy elsewhere."""
+    here, used = [], []
+    for path in sorted(LIB.rglob("*.py")):
+        module = _module_name(path)
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ClassDef | ast.FunctionDef) and node.name in ROBOT_NAMES:
+                if ROBOT_NAMES[node.name] != module:
+                    here.append(f"{module} defines {node.name}")
+            if (
+                isinstance(node, ast.ImportFrom)
+                and node.level == 0
+                and (node.module or "").startswith("lfdfuse")
+            ):
+                for a in node.names:
+                    if a.name in ROBOT_NAMES and node.module != ROBOT_NAMES[a.name]:
+                        used.append(f"{module} imports {a.name} from {node.module}")
+    assert not here, "robot types defined outside robot/:\n  " + "\n  ".join(here)
+    assert not used, "robot types imported from another stage:\n  " + "\n  ".join(used)
+
+
+def test_stages_reach_robot_types_without_another_stages_internals() -> None:
+    """behaviors reads scans without the simulator; drive reads the wire without the importers;
+    the importers and the simulator know nothing of each other."""
+    forbidden = {
+        "behaviors": ("lfdfuse.sim",),
+        "drive": ("lfdfuse.sources.importers", "lfdfuse.sim.simulator"),
+        "sim": ("lfdfuse.sources",),
+        "sources.importers": ("lfdfuse.sim", "lfdfuse.drive"),
+    }
+    bad = []
+    for m, deps in _import_graph().items():
+        for who, banned in forbidden.items():
+            if m == f"lfdfuse.{who}" or m.startswith(f"lfdfuse.{who}."):
+                bad += [
+                    f"{m} imports {d}" for d in deps if any(d == b or d.startswith(b + ".") for b in banned)
+                ]
+    assert not bad, "\n  ".join(bad)

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lfdfuse.sim.sensors import ScanGeometry
+from lfdfuse.robot.readings import ScanGeometry
 
 LEFT, RIGHT = 0, 1
 SIDES = ("left", "right")

@@ -26,7 +26,7 @@ from typing import Literal, Protocol
 
 import numpy as np
 
-from lfdfuse.sim.sensors import Detection, ScanGeometry
+from lfdfuse.robot.readings import Detection, ScanGeometry
 
 #: the name prefix of the behaviours toward a target: ``attract_<target>``
 ATTRACT = "attract_"

@@ -127,7 +127,7 @@ def checked(parse: Callable[[str], object]) -> Callable[[str | None], str | None
 
 def start_option() -> Any:
     """``--start X,Y,THETA``: the start pose, checked as it is read."""
-    from lfdfuse.sim.robot import Pose
+    from lfdfuse.robot.pose import Pose
 
     return typer.Option(
         None,

@@ -25,7 +25,7 @@ from lfdfuse.execute.report import write_report
 from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.execute.starts import StartsOptions
 from lfdfuse.network.table import load_table
-from lfdfuse.sim.robot import Pose
+from lfdfuse.robot.pose import Pose
 from lfdfuse.world.model import DEFAULT_WORLD, load_world
 
 

@@ -11,9 +11,10 @@ from rich.console import Console
 
 from lfdfuse.cli.app import app
 from lfdfuse.cli.common import console, positive, user_errors
+from lfdfuse.robot.mount import Mount
 from lfdfuse.sources.importers.convert import CmdFrom, ImportOptions, ImportSummary, import_log
 from lfdfuse.sources.importers.goals import read_goals
-from lfdfuse.sources.importers.records import Mount, TopicChoice
+from lfdfuse.sources.importers.records import TopicChoice
 
 
 class Format(StrEnum):

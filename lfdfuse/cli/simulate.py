@@ -24,7 +24,7 @@ from lfdfuse.cli.render import print_run
 from lfdfuse.errors import ConfigError
 from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.network.table import parse_table
-from lfdfuse.sim.robot import Pose
+from lfdfuse.robot.pose import Pose
 from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import STYLES
 from lfdfuse.sources.teachers import NetworkTeacher, TeacherParams, teacher_from

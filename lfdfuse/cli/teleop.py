@@ -43,8 +43,8 @@ from lfdfuse.execute.correct import correct, correction_driver
 from lfdfuse.execute.report import write_report
 from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.network.table import load_table
-from lfdfuse.sim.robot import Pose
-from lfdfuse.sim.sensors import ScanGeometry
+from lfdfuse.robot.pose import Pose
+from lfdfuse.robot.readings import ScanGeometry
 from lfdfuse.sources.teleop.clock import SimClock
 from lfdfuse.sources.teleop.inputs import Input
 from lfdfuse.sources.teleop.keys import HELP, KeyDecoder

@@ -4,7 +4,7 @@ No socket and no clock: the session calls :meth:`DriveCore.scan` with the wall t
 arrived, and the core answers with a :class:`Tick` (the command to send, clamped, and why) or
 a :class:`Skip`. The network itself is the one ``execute`` runs
 (:class:`~lfdfuse.network.stepper.NetworkStepper`: the same behaviours, runtime, vector →
-command mapping and safety reflex), fed an :class:`~lfdfuse.sim.simulator.Observation` built
+command mapping and safety reflex), fed an :class:`~lfdfuse.robot.readings.Observation` built
 from the robot's own sensing: the scan in the base frame, odometry for the landmark cues
 (increments only), a camera's detections when the robot has one, no sonar.
 """
@@ -19,15 +19,17 @@ import numpy as np
 from lfdfuse.behaviors.catalogue import needs
 from lfdfuse.control.drive import command_to_heading
 from lfdfuse.drive.decode import LiveOdom, LiveScan, LiveTargets, LiveTf, LiveTwist
-from lfdfuse.drive.frames import BASE_FRAMES, ScanFrame, TfTree
+from lfdfuse.drive.frames import ScanFrame, TfTree
 from lfdfuse.drive.safety import Limits, Watchdog
 from lfdfuse.errors import ConfigError
 from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.network.table import FusionTable, Network
-from lfdfuse.sim.robot import Pose, RobotParams
-from lfdfuse.sim.sensors import Reading, SensorParams
-from lfdfuse.sim.simulator import Observation
-from lfdfuse.sources.importers.records import Mount
+from lfdfuse.robot.mount import Mount
+from lfdfuse.robot.pose import Pose
+from lfdfuse.robot.readings import Observation, Reading
+from lfdfuse.robot.ros import BASE_FRAMES
+from lfdfuse.sim.robot import RobotParams
+from lfdfuse.sim.sensors import SensorParams
 
 #: scans to wait for a tf chain to the laser before assuming it sits at the base, facing forward
 MOUNT_WAIT_SCANS = 20

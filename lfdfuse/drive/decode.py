@@ -27,8 +27,18 @@ from rosbags.typesys.store import Typestore
 
 from lfdfuse.log.messages import decode_detections, decode_pose, decode_scan, yaw_of
 from lfdfuse.log.stamps import ROBOT_FRAME, from_stamp
-from lfdfuse.sim.sensors import Detection, LaserParams
-from lfdfuse.sources.importers.records import ScanRecord, no_return
+from lfdfuse.robot.readings import Detection
+from lfdfuse.robot.records import ScanRecord, no_return
+from lfdfuse.robot.ros import (
+    frame_name,
+    header_ns,
+    odometry_pose,
+    quaternion_matrix,
+    scan_record,
+    transform_matrix,
+    twist_command,
+)
+from lfdfuse.sim.sensors import LaserParams
 from lfdfuse.sources.teleop.inputs import TwistError, parse_twist
 
 TWIST = "geometry_msgs/msg/Twist"
@@ -98,29 +108,8 @@ Record = LiveScan | LiveOdom | LiveTf | LiveTwist | LiveTargets
 Decoder = Callable[[bytes], Record]
 
 
-def _frame(name: str) -> str:
-    return name.lstrip("/")
-
-
-def matrix(tx: float, ty: float, tz: float, qx: float, qy: float, qz: float, qw: float) -> np.ndarray:
-    """A translation and a unit quaternion as a 4×4 homogeneous matrix."""
-    x, y, z, w = qx, qy, qz, qw
-    m = np.eye(4)
-    m[:3, :3] = [
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ]
-    m[:3, 3] = [tx, ty, tz]
-    return m
-
-
 def _frozen(m: np.ndarray) -> tuple[tuple[float, ...], ...]:
     return tuple(tuple(float(v) for v in row) for row in m)
-
-
-def _stamp_ns(header: Any) -> int:
-    return int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
 
 
 # -- CDR (foxglove_bridge) ----------------------------------------------------------------------
@@ -141,36 +130,27 @@ def typestore_for(schema_name: str, schema: str) -> Typestore:
 
 
 def _cdr_scan(m: Any) -> LiveScan:
-    max_m = round(float(m.range_max), 6)  # float32 in the message: 5.6, not 5.5999999
-    ranges = no_return(np.asarray(m.ranges, dtype=np.float64), min_m=float(m.range_min), max_m=max_m)
-    rec = ScanRecord(_stamp_ns(m.header), float(m.angle_min), float(m.angle_increment), ranges, max_m)
-    return LiveScan(_frame(m.header.frame_id), rec)
+    return LiveScan(frame_name(m.header.frame_id), scan_record(m, header_ns(m.header)))
 
 
 def _cdr_odom(m: Any) -> LiveOdom:
-    p = m.pose.pose
-    q = p.orientation
-    yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-    return LiveOdom(
-        _stamp_ns(m.header), float(p.position.x), float(p.position.y), yaw, _frame(m.child_frame_id)
-    )
+    p = odometry_pose(m, header_ns(m.header))
+    return LiveOdom(p.t_ns, p.x, p.y, p.theta, frame_name(m.child_frame_id))
 
 
 def _cdr_tf(m: Any) -> LiveTf:
     out = []
     for tr in m.transforms:
-        t, q = tr.transform.translation, tr.transform.rotation
-        mat = matrix(t.x, t.y, t.z, q.x, q.y, q.z, q.w)
-        out.append(Transform(_frame(tr.header.frame_id), _frame(tr.child_frame_id), _frozen(mat)))
+        mat = transform_matrix(tr.transform)
+        out.append(Transform(frame_name(tr.header.frame_id), frame_name(tr.child_frame_id), _frozen(mat)))
     return LiveTf(tuple(out))
 
 
 def _cdr_twist(m: Any) -> LiveTwist:
-    tw = getattr(m, "twist", m)  # TwistStamped or Twist
-    v, w = float(tw.linear.x), float(tw.angular.z)
-    if not (math.isfinite(v) and math.isfinite(w)):
+    c = twist_command(m, 0)  # a plain Twist has no stamp
+    if not (math.isfinite(c.v_mps) and math.isfinite(c.omega_rps)):
         raise DecodeError("a Twist that is not finite")
-    return LiveTwist(v, w)
+    return LiveTwist(c.v_mps, c.omega_rps)
 
 
 # -- JSON (lfdfuse's own server) ----------------------------------------------------------------
@@ -184,7 +164,7 @@ def _json_scan(m: dict[str, Any]) -> LiveScan:
     inc = (s.end_rad - s.start_rad) / (n - 1) if n > 1 else 0.0
     ranges = no_return(np.asarray(s.ranges_m, dtype=np.float64), max_m=JSON_MAX_RANGE_M)
     rec = ScanRecord(from_stamp(m["timestamp"]), s.start_rad, inc, ranges, JSON_MAX_RANGE_M)
-    return LiveScan(_frame(str(m.get("frame_id", ROBOT_FRAME))), rec)
+    return LiveScan(frame_name(str(m.get("frame_id", ROBOT_FRAME))), rec)
 
 
 def _json_pose(m: dict[str, Any]) -> LiveOdom:
@@ -194,9 +174,10 @@ def _json_pose(m: dict[str, Any]) -> LiveOdom:
 
 def _json_tf(m: dict[str, Any]) -> LiveTf:
     t, q = m["translation"], m["rotation"]
-    mat = matrix(t["x"], t["y"], t.get("z", 0.0), q["x"], q["y"], q["z"], q["w"])
+    mat = quaternion_matrix(t["x"], t["y"], t.get("z", 0.0), q["x"], q["y"], q["z"], q["w"])
     yaw_of(q)  # validates the quaternion's fields
-    return LiveTf((Transform(_frame(m["parent_frame_id"]), _frame(m["child_frame_id"]), _frozen(mat)),))
+    parent, child = frame_name(m["parent_frame_id"]), frame_name(m["child_frame_id"])
+    return LiveTf((Transform(parent, child, _frozen(mat)),))
 
 
 def _json_twist(data: bytes) -> Record:

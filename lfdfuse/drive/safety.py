@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 from lfdfuse.control.drive import DriveParams
 from lfdfuse.errors import ConfigError
+from lfdfuse.robot.limits import stated_limits
 
 MAX_SCAN_AGE_S = 0.5
 #: how often the watchdog looks (and repeats the zero Twist while blind)
@@ -45,17 +46,9 @@ def limits_of(
     """The robot's limits: the table's provenance (``v_max_mps``, ``omega_max_rps``, as an
     imported robot's log has them), else the simulated robot's; clamped by the options."""
     base = DriveParams()
-    got: list[float] = []
-    whence = "the table's robot"
-    for key, default in (("v_max_mps", base.v_max_mps), ("omega_max_rps", base.omega_max_rps)):
-        raw = estimated_by.get(key)
-        try:
-            value = float(raw) if isinstance(raw, int | float | str) else math.nan
-        except ValueError:
-            value = math.nan
-        if not (math.isfinite(value) and value > 0):
-            value, whence = default, "the simulated robot's: the table does not say"
-        got.append(value)
+    stated = stated_limits(estimated_by)
+    whence = "the table's robot" if None not in stated else "the simulated robot's: the table does not say"
+    got = [stated[0] or base.v_max_mps, stated[1] or base.omega_max_rps]
     for name, opt in (("--max-speed", max_speed), ("--max-turn", max_turn)):
         if opt is not None and not (math.isfinite(opt) and opt > 0):
             raise ConfigError(f"{name} must be a positive number")

@@ -23,9 +23,9 @@ from lfdfuse.files import parse_yaml
 from lfdfuse.log import lfd
 from lfdfuse.log.codec import MessageError
 from lfdfuse.log.reader import file_info, hold, iter_messages, read_run
+from lfdfuse.robot.readings import ScanGeometry
 from lfdfuse.segment.read import read_segmented
 from lfdfuse.sim.robot import RobotParams
-from lfdfuse.sim.sensors import ScanGeometry
 from lfdfuse.world.model import World, builtin_names, load_world, parse_world
 
 LogKind = Literal["demo", "segmented", "run"]

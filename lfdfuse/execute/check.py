@@ -23,8 +23,9 @@ from lfdfuse.files import parse_yaml
 from lfdfuse.log.run import Run
 from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.network.table import FusionTable
+from lfdfuse.robot.pose import Pose
 from lfdfuse.sim.loop import run
-from lfdfuse.sim.robot import Pose, RobotParams
+from lfdfuse.sim.robot import RobotParams
 from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.sim.simulator import Simulator
 from lfdfuse.world.model import World

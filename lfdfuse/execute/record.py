@@ -17,7 +17,7 @@ from lfdfuse.log import messages as msg
 from lfdfuse.log.writer import LogWriter
 from lfdfuse.network.runtime import step_name_of
 from lfdfuse.network.stepper import NetworkStepper
-from lfdfuse.sim.simulator import Observation
+from lfdfuse.robot.readings import Observation
 
 
 class LfdRecorder:

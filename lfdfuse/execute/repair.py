@@ -19,9 +19,9 @@ from dataclasses import dataclass, replace
 
 from lfdfuse.execute.check import Check, DemoWorld, check_all, score
 from lfdfuse.network.table import FusionTable
+from lfdfuse.robot.pose import Pose
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
 from lfdfuse.segment.track import LandmarkTrack, OpeningCue, teacher_turns
-from lfdfuse.sim.robot import Pose
 
 #: a teacher's turn is blamed for a departure when it ended at most this many steps before the
 #: last point the robot met

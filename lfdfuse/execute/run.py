@@ -20,8 +20,9 @@ from lfdfuse.log.recorder import Recorder, provenance
 from lfdfuse.log.writer import LogWriter
 from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.network.table import FusionTable
+from lfdfuse.robot.pose import Pose
 from lfdfuse.sim.loop import RunSummary, Sink, run
-from lfdfuse.sim.robot import Pose, RobotParams
+from lfdfuse.sim.robot import RobotParams
 from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.sim.simulator import Simulator
 from lfdfuse.world.model import World

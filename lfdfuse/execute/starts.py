@@ -22,7 +22,8 @@ from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.files import parse_yaml, read_text
 from lfdfuse.network.table import load_table
 from lfdfuse.parallel import Batch, Executor, Outcome
-from lfdfuse.sim.robot import Pose, RobotParams
+from lfdfuse.robot.pose import Pose
+from lfdfuse.sim.robot import RobotParams
 from lfdfuse.world.model import World, check_pose_free, load_world
 
 #: the perturbation of ``--starts N``: up to this far from the base start in x and in y (m) …

@@ -9,8 +9,8 @@ from __future__ import annotations
 from lfdfuse import __version__
 from lfdfuse.log import messages as msg
 from lfdfuse.log.writer import LogWriter
+from lfdfuse.robot.readings import Observation
 from lfdfuse.sim.sensors import SensorParams
-from lfdfuse.sim.simulator import Observation
 from lfdfuse.world.model import World
 
 

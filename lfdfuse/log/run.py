@@ -27,7 +27,7 @@ from lfdfuse.log.sensing import (
     scan_geometry,
 )
 from lfdfuse.log.stamps import check_log_time
-from lfdfuse.sim.sensors import Detection, ScanGeometry
+from lfdfuse.robot.readings import Detection, ScanGeometry
 
 #: most beams a scan may have (real 2D lidars have up to a few thousand)
 MAX_BEAMS = 8192

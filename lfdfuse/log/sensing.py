@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from lfdfuse.log.stamps import IDENTITY_POSE, MAP_FRAME, ROBOT_FRAME, from_stamp, quat_z, stamp, yaw_of
-from lfdfuse.sim.sensors import Detection, ScanGeometry
+from lfdfuse.robot.readings import Detection, ScanGeometry
 
 
 def laser_scan(

@@ -29,10 +29,10 @@ from lfdfuse.log.lfd import HelpReason
 from lfdfuse.network.landmark_goals import Cues
 from lfdfuse.network.runtime import Decision, NetworkRuntime, step_name_of
 from lfdfuse.network.table import FusionTable, Network, leaf_steps
+from lfdfuse.robot.readings import Observation, ScanGeometry
 from lfdfuse.sim.loop import side_beam_index
 from lfdfuse.sim.robot import RobotParams
-from lfdfuse.sim.sensors import ScanGeometry, SensorParams, target_reached
-from lfdfuse.sim.simulator import Observation
+from lfdfuse.sim.sensors import SensorParams, target_reached
 from lfdfuse.world.model import World
 
 __all__ = ["HelpReason", "HelpRequest", "NetworkStepper", "help_reason", "weighted_targets"]

@@ -30,6 +30,7 @@ from lfdfuse.errors import LogError
 from lfdfuse.log import lfd
 from lfdfuse.log.reader import check_log_file, iter_attachments, iter_raw, meta_float, read_run
 from lfdfuse.log.writer import LogWriter
+from lfdfuse.robot.limits import stated_limits
 from lfdfuse.segment.commands import detect_commands
 from lfdfuse.segment.demo import demonstrated, lag_ns_of, observations_of
 from lfdfuse.segment.goals import Segmentation, segment_outputs
@@ -180,14 +181,8 @@ def segment_file(
 def drive_params_of(metadata: dict[str, str]) -> DriveParams:
     """The robot's speed and turn limits from a log's provenance (defaults where absent or invalid)."""
     base = DriveParams()
-    try:
-        v = float(metadata.get("v_max_mps", base.v_max_mps))
-        w = float(metadata.get("omega_max_rps", base.omega_max_rps))
-    except ValueError:
-        return base
-    if not (math.isfinite(v) and math.isfinite(w) and v > 0 and w > 0):
-        return base
-    return replace(base, v_max_mps=v, omega_max_rps=w)
+    v, w = stated_limits(metadata)
+    return replace(base, v_max_mps=v or base.v_max_mps, omega_max_rps=w or base.omega_max_rps)
 
 
 def compute_in_chunks(

@@ -24,7 +24,7 @@ from lfdfuse.behaviors.openings import (
     sensed_onsets,
     side_openings,
 )
-from lfdfuse.sim.sensors import ScanGeometry
+from lfdfuse.robot.readings import ScanGeometry
 
 
 @dataclass(frozen=True)

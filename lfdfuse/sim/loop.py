@@ -14,8 +14,9 @@ from typing import Protocol
 
 import numpy as np
 
-from lfdfuse.sim.robot import Pose
-from lfdfuse.sim.simulator import CommandSource, Observation, Simulator
+from lfdfuse.robot.pose import Pose
+from lfdfuse.robot.readings import Observation
+from lfdfuse.sim.simulator import CommandSource, Simulator
 
 Progress = Callable[[float, float], None]  # (done, total) in seconds of simulated time
 

@@ -7,27 +7,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lfdfuse.sim.robot import Pose
+from lfdfuse.robot.pose import Pose
+from lfdfuse.robot.readings import Detection, Reading, ScanGeometry
 from lfdfuse.world.model import World
 from lfdfuse.world.raycast import RayCaster
-
-
-@dataclass(frozen=True)
-class ScanGeometry:
-    """Beam layout of a planar scanner: beam ``i`` is at ``start_rad + i·increment_rad``."""
-
-    start_rad: float
-    increment_rad: float
-    count: int
-    max_range_m: float
-
-    @property
-    def angles(self) -> np.ndarray:
-        return self.start_rad + self.increment_rad * np.arange(self.count)
-
-    @property
-    def end_rad(self) -> float:
-        return self.start_rad + self.increment_rad * (self.count - 1)
 
 
 @dataclass(frozen=True)
@@ -78,24 +61,6 @@ class SensorParams:
             SonarParams(self.sonar.count, self.sonar.max_range_m, std_m),
             self.camera,
         )
-
-
-@dataclass(frozen=True)
-class Detection:
-    """One target seen by the camera: robot-frame bearing (rad) and range (m)."""
-
-    name: str
-    bearing_rad: float
-    range_m: float
-
-
-@dataclass(frozen=True)
-class Reading:
-    """Everything the robot senses at one instant."""
-
-    ranges_m: np.ndarray  # (B,) laser, no return = max range
-    sonar_m: np.ndarray  # (8,) rear sonars, no return = max range
-    detections: tuple[Detection, ...]
 
 
 def target_reached(range_m: float, camera: CameraParams) -> bool:

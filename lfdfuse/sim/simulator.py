@@ -15,24 +15,11 @@ from typing import Protocol
 import numpy as np
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.sim.robot import Pose, RobotParams, move
-from lfdfuse.sim.sensors import Reading, SensorParams, Sensors
+from lfdfuse.robot.pose import Pose
+from lfdfuse.robot.readings import Observation
+from lfdfuse.sim.robot import RobotParams, move
+from lfdfuse.sim.sensors import SensorParams, Sensors
 from lfdfuse.world.model import World, check_pose_free
-
-
-@dataclass(frozen=True)
-class Observation:
-    """What the robot senses at tick ``k`` (time ``t_ns`` from the start of the run).
-
-    ``pose`` is the true pose (the simulator knows it; it is logged as ``/pose``),
-    ``blocked`` whether the move that led here was refused by a wall.
-    """
-
-    k: int
-    t_ns: int
-    pose: Pose
-    reading: Reading
-    blocked: bool = False
 
 
 class CommandSource(Protocol):

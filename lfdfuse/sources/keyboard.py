@@ -26,8 +26,8 @@ import numpy as np
 
 from lfdfuse.control.drive import DriveParams, command_to_heading
 from lfdfuse.log.writer import LogWriter
+from lfdfuse.robot.readings import Observation
 from lfdfuse.sim.loop import GoalSource
-from lfdfuse.sim.simulator import Observation
 from lfdfuse.sources.teleop.inputs import SCHEMA, TOPIC, Input, teleop_input
 from lfdfuse.sources.teleop.keys import KeyState, press
 

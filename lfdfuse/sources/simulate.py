@@ -10,8 +10,9 @@ import numpy as np
 from lfdfuse.errors import ConfigError
 from lfdfuse.log.recorder import Recorder, provenance
 from lfdfuse.log.writer import LogWriter
+from lfdfuse.robot.pose import Pose
 from lfdfuse.sim.loop import Progress, RunSummary, run
-from lfdfuse.sim.robot import Pose, RobotParams
+from lfdfuse.sim.robot import RobotParams
 from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.sim.simulator import Simulator
 from lfdfuse.sources.keyboard import KeyboardParams, KeyboardPerson, PressRecorder

@@ -20,9 +20,10 @@ import numpy as np
 from lfdfuse.control.drive import DriveParams, heading_to_command
 from lfdfuse.control.safety import SafetyParams, free_heading
 from lfdfuse.files import YamlKind, kind_of, read_yaml
-from lfdfuse.sim.robot import Pose, wrap_angle
-from lfdfuse.sim.sensors import CameraParams, Reading, ScanGeometry, target_reached
-from lfdfuse.sim.simulator import Observation
+from lfdfuse.robot.pose import Pose
+from lfdfuse.robot.readings import Observation, Reading, ScanGeometry
+from lfdfuse.sim.robot import wrap_angle
+from lfdfuse.sim.sensors import CameraParams, target_reached
 from lfdfuse.sources.planner import Planner
 from lfdfuse.sources.tasks import Leg, parse_style, parse_task
 from lfdfuse.world.model import World

@@ -29,7 +29,7 @@ from lfdfuse.behaviors.primitives import (
 from lfdfuse.behaviors.spec import BehaviorSpec
 from lfdfuse.drive.core import Inputs, missing_input
 from lfdfuse.network.table import default_weights_for
-from lfdfuse.sim.sensors import ScanGeometry
+from lfdfuse.robot.readings import ScanGeometry
 from lfdfuse.viz import colors
 from lfdfuse.world.model import load_world
 from tests.conftest import ROOT

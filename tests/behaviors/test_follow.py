@@ -18,11 +18,11 @@ from lfdfuse.behaviors.primitives import BehaviorParams, BehaviorState, Observat
 from lfdfuse.log.reader import read_run
 from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.network.table import parse_table
+from lfdfuse.robot.pose import Pose
+from lfdfuse.robot.readings import Observation, Reading, ScanGeometry
 from lfdfuse.segment.demo import observations_of
 from lfdfuse.segment.pipeline import compute_in_chunks
-from lfdfuse.sim.robot import Pose
-from lfdfuse.sim.sensors import Reading, ScanGeometry, SensorParams
-from lfdfuse.sim.simulator import Observation
+from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.sources.importers.convert import import_log
 from tests.conftest import ROOT, SHARED
 

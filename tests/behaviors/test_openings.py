@@ -20,7 +20,7 @@ from lfdfuse.behaviors.openings import (
     sensed_onsets,
     side_openings,
 )
-from lfdfuse.sim.sensors import ScanGeometry
+from lfdfuse.robot.readings import ScanGeometry
 
 # a symmetric 181-beam laser: beam i and beam 180 − i are mirror images
 GEOM = ScanGeometry(-math.pi / 2, math.pi / 180, 181, 8.0)

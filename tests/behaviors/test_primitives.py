@@ -18,7 +18,7 @@ from lfdfuse.behaviors.primitives import (
     resolve_behaviors,
 )
 from lfdfuse.errors import ConfigError
-from lfdfuse.sim.sensors import Detection, ScanGeometry
+from lfdfuse.robot.readings import Detection, ScanGeometry
 
 ALL = [*BASE_BEHAVIORS, "attract_red"]
 SONAR = ScanGeometry(math.pi / 2, math.pi / 7, 8, 5.0)

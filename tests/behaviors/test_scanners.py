@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from lfdfuse.behaviors.primitives import BASE_BEHAVIORS, Observations, compute, distinct_beams
-from lfdfuse.sim.sensors import LaserParams, ScanGeometry
+from lfdfuse.robot.readings import ScanGeometry
+from lfdfuse.sim.sensors import LaserParams
 
 NAMES = [n for n in BASE_BEHAVIORS if n != "sonar_avoid"]
 SIM = LaserParams().geometry  # 181 beams over the front 180°, 8 m

@@ -27,9 +27,9 @@ import numpy as np
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
 from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.network.table import FusionTable
+from lfdfuse.robot.pose import Pose
 from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.segment.read import read_segmented
-from lfdfuse.sim.robot import Pose
 from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import Leg, load_task
 from lfdfuse.world.model import load_world

@@ -19,7 +19,8 @@ from lfdfuse.errors import ConfigError
 from lfdfuse.log import messages as msg
 from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step, load_table
-from lfdfuse.sim.sensors import Reading, SensorParams
+from lfdfuse.robot.readings import Reading
+from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.sim.simulator import Simulator
 from lfdfuse.world.model import load_world
 

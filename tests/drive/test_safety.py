@@ -9,11 +9,12 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from lfdfuse.drive.decode import LiveTf, Transform, matrix
+from lfdfuse.drive.decode import LiveTf, Transform
 from lfdfuse.drive.frames import ScanFrame, TfTree
 from lfdfuse.drive.safety import Limits, Watchdog, limits_of
 from lfdfuse.errors import ConfigError
-from lfdfuse.sources.importers.records import ScanRecord
+from lfdfuse.robot.records import ScanRecord
+from lfdfuse.robot.ros import quaternion_matrix
 
 
 @given(st.floats(allow_nan=True, allow_infinity=True), st.floats(allow_nan=True, allow_infinity=True))
@@ -62,7 +63,7 @@ def _tf(parent: str, child: str, x: float, yaw: float, roll: float = 0.0) -> Liv
     cr, sr = math.cos(roll / 2), math.sin(roll / 2)
     cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
     q = (sr * cy, -sr * sy, cr * sy, cr * cy) if roll else (0.0, 0.0, sy, cy)
-    m = matrix(x, 0.0, 0.0, *q)
+    m = quaternion_matrix(x, 0.0, 0.0, *q)
     return LiveTf((Transform(parent, child, tuple(tuple(float(v) for v in r) for r in m)),))
 
 

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from lfdfuse.execute.check import RADIUS_M, SPACING_M, demo_world, follow, path_points
 from lfdfuse.log.reader import read_run
-from lfdfuse.sim.sensors import ScanGeometry
+from lfdfuse.robot.readings import ScanGeometry
 from tests.conftest import ROOT
 
 GEOM = ScanGeometry(-math.pi / 2, math.pi / 2, 3, 8.0)

@@ -25,9 +25,9 @@ from lfdfuse.evaluate.roundtrip import (
 from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.log.reader import iter_messages
 from lfdfuse.network.table import FusionTable
+from lfdfuse.robot.pose import Pose
 from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.segment.read import read_segmented
-from lfdfuse.sim.robot import Pose
 from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import Leg
 from lfdfuse.world.model import load_world

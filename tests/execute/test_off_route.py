@@ -28,12 +28,13 @@ from lfdfuse.network.landmark_goals import Ahead, Cues, Landmark, Progress
 from lfdfuse.network.runtime import DRIVE_ON_RAD, NetworkRuntime, keep_within
 from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.network.table import dump_table, parse_table
+from lfdfuse.robot.pose import Pose
+from lfdfuse.robot.readings import Observation
 from lfdfuse.segment.decisions import DecisionParams
 from lfdfuse.segment.read import read_segmented
 from lfdfuse.sim.loop import run as sim_run
-from lfdfuse.sim.robot import Pose
 from lfdfuse.sim.sensors import LaserParams, SensorParams
-from lfdfuse.sim.simulator import Observation, Simulator
+from lfdfuse.sim.simulator import Simulator
 from lfdfuse.world.model import load_world
 from tests.conftest import ROOT
 from tests.support.generated import THREE_GOALS, TIME_FACTOR

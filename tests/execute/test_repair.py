@@ -28,10 +28,10 @@ from lfdfuse.execute.repair import (
 )
 from lfdfuse.log.reader import read_run
 from lfdfuse.network.table import FusionTable
+from lfdfuse.robot.readings import ScanGeometry
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
 from lfdfuse.segment.read import read_segmented
 from lfdfuse.segment.track import LandmarkTrack, OpeningCue
-from lfdfuse.sim.sensors import ScanGeometry
 from tests.support.generated import THREE_GOALS
 from tests.support.generated_worlds import generate_offroute
 

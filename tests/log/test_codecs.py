@@ -20,7 +20,7 @@ from lfdfuse.log.codec import MessageError
 from lfdfuse.log.command import COMMAND_SOURCES, DRIVE_TOPICS, DriveCommand
 from lfdfuse.log.schemas import schema
 from lfdfuse.log.sensing import scan_geometry, stamp_of
-from lfdfuse.sim.sensors import Detection, ScanGeometry
+from lfdfuse.robot.readings import Detection, ScanGeometry
 from lfdfuse.sources.teleop.inputs import SCHEMA as TELEOP_SCHEMA
 from lfdfuse.sources.teleop.inputs import Input, decode_teleop_input, teleop_input
 from lfdfuse.world.model import builtin_names, load_world

@@ -10,9 +10,10 @@ import numpy as np
 from lfdfuse.log.reader import file_info, read_run
 from lfdfuse.log.recorder import Recorder, provenance
 from lfdfuse.log.writer import PROVENANCE, LogWriter
+from lfdfuse.robot.readings import Observation
 from lfdfuse.sim.loop import run
 from lfdfuse.sim.sensors import SensorParams
-from lfdfuse.sim.simulator import Observation, Simulator
+from lfdfuse.sim.simulator import Simulator
 from lfdfuse.world.model import load_world
 
 

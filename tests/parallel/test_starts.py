@@ -25,7 +25,7 @@ from lfdfuse.execute.starts import (
     wilson_interval,
 )
 from lfdfuse.parallel import InProcess
-from lfdfuse.sim.robot import Pose
+from lfdfuse.robot.pose import Pose
 from lfdfuse.world.model import check_pose_free, load_world
 from tests.parallel.conftest import CORRIDOR_TABLE
 

@@ -12,10 +12,10 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from lfdfuse.behaviors.openings import OpeningParams
+from lfdfuse.robot.readings import ScanGeometry
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, find_decisions, split_segments
 from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.segment.track import LandmarkTrack, OpeningCue, opening_order, runs
-from lfdfuse.sim.sensors import ScanGeometry
 
 N = 120
 GEOM = ScanGeometry(-math.pi / 2, math.pi / 2, 3, 8.0)

@@ -12,8 +12,8 @@ from hypothesis import strategies as st
 from lfdfuse.control.drive import DriveParams, vector_to_command
 from lfdfuse.errors import LogError
 from lfdfuse.log.reader import Run
+from lfdfuse.robot.readings import Detection, ScanGeometry
 from lfdfuse.segment.demo import demonstrated, lag_ns_of, target_names_of
-from lfdfuse.sim.sensors import Detection, ScanGeometry
 
 DT = 100_000_000
 GEOM = ScanGeometry(-math.pi / 2, math.pi / 2, 3, 8.0)

@@ -14,10 +14,10 @@ from lfdfuse.cli.main import app
 from lfdfuse.log import LogWriter
 from lfdfuse.log import messages as msg
 from lfdfuse.log.reader import iter_messages
+from lfdfuse.robot.readings import Detection, ScanGeometry
 from lfdfuse.segment.goals import segment_goals, segment_outputs
 from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.segment.read import read_segmented
-from lfdfuse.sim.sensors import Detection, ScanGeometry
 from tests.conftest import mcap_check
 
 GEOM = ScanGeometry(-math.pi / 2, math.pi / 180, 181, 8.0)

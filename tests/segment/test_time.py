@@ -14,9 +14,9 @@ from lfdfuse.control.drive import DriveParams, command_to_heading
 from lfdfuse.log import LogWriter
 from lfdfuse.log import messages as msg
 from lfdfuse.log.reader import file_info, iter_attachments, iter_raw
+from lfdfuse.robot.readings import ScanGeometry
 from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.segment.read import read_segmented
-from lfdfuse.sim.sensors import ScanGeometry
 
 GEOM = ScanGeometry(-math.pi / 2, math.pi / 180, 181, 8.0)
 

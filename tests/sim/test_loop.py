@@ -5,9 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from lfdfuse.robot.pose import Pose
+from lfdfuse.robot.readings import Observation
 from lfdfuse.sim.loop import run
-from lfdfuse.sim.robot import Pose
-from lfdfuse.sim.simulator import Observation, Simulator
+from lfdfuse.sim.simulator import Simulator
 from lfdfuse.world.model import load_world
 
 

@@ -2,7 +2,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from lfdfuse.sim.robot import Pose, RobotParams, move
+from lfdfuse.robot.pose import Pose
+from lfdfuse.sim.robot import RobotParams, move
 from lfdfuse.sim.sensors import SensorParams, Sensors
 from lfdfuse.world.model import load_world
 from lfdfuse.world.raycast import RayCaster

@@ -17,12 +17,14 @@ from typer.testing import CliRunner
 
 from lfdfuse.errors import ConfigError, LogError
 from lfdfuse.log.reader import file_info, read_run
+from lfdfuse.robot.mount import Mount, base_geometry
+from lfdfuse.robot.records import ScanRecord
 from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.sources.importers import detect_format, is_lfdfuse_log, require_lfdfuse_log
-from lfdfuse.sources.importers.convert import ImportOptions, base_geometry, import_log
+from lfdfuse.sources.importers.convert import ImportOptions, import_log
 from lfdfuse.sources.importers.derive import commands_from_poses
 from lfdfuse.sources.importers.goals import parse_goals
-from lfdfuse.sources.importers.records import Mount, ScanRecord, SourceError, TopicChoice, stamp_ns
+from lfdfuse.sources.importers.records import SourceError, TopicChoice, stamp_ns
 from tests.conftest import SHARED, mcap_check
 
 REAL = SHARED / "realdata"

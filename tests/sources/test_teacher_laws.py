@@ -12,9 +12,10 @@ from hypothesis import strategies as st
 
 from lfdfuse.control.drive import DriveParams
 from lfdfuse.errors import LfdError
+from lfdfuse.robot.readings import ScanGeometry
 from lfdfuse.sim.loop import run
 from lfdfuse.sim.robot import RobotParams
-from lfdfuse.sim.sensors import ScanGeometry, SensorParams
+from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.sim.simulator import Simulator
 from lfdfuse.sources.planner import Planner
 from lfdfuse.sources.tasks import Leg

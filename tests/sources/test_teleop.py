@@ -37,7 +37,7 @@ from lfdfuse.control.drive import DriveParams
 from lfdfuse.errors import ConfigError
 from lfdfuse.log.reader import file_info, iter_messages
 from lfdfuse.log.schemas import schema
-from lfdfuse.sim.robot import Pose
+from lfdfuse.robot.pose import Pose
 from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.sources.teleop.clock import SimClock
 from lfdfuse.sources.teleop.inputs import Input, TwistError, decode_teleop_input, parse_twist

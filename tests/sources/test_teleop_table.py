@@ -19,7 +19,7 @@ from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.log import lfd
 from lfdfuse.log.reader import file_info, iter_messages
 from lfdfuse.network.table import FusionTable, dump_table, load_table
-from lfdfuse.sim.robot import Pose
+from lfdfuse.robot.pose import Pose
 from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.sources.teleop.clock import SimClock
 from lfdfuse.sources.teleop.inputs import Input, decode_teleop_input

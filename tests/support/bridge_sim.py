@@ -36,10 +36,11 @@ from foxglove.websocket import Capability, ChannelView, Client, ClientChannel, S
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from lfdfuse.log.reader import iter_raw
+from lfdfuse.robot.pose import Pose
+from lfdfuse.robot.readings import Observation
 from lfdfuse.sim.loop import side_beam_index
-from lfdfuse.sim.robot import Pose
 from lfdfuse.sim.sensors import SensorParams
-from lfdfuse.sim.simulator import Observation, Simulator
+from lfdfuse.sim.simulator import Simulator
 from lfdfuse.sources.teleop.foxglove_server import FoxgloveLive
 from lfdfuse.sources.teleop.inputs import TwistError, parse_twist
 from lfdfuse.world.model import World

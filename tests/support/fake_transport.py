@@ -24,11 +24,12 @@ import numpy as np
 from lfdfuse.drive.decode import JSON_MAX_RANGE_M, LiveOdom, LiveScan, LiveTargets, Role
 from lfdfuse.drive.options import Stopper
 from lfdfuse.drive.transport import Arrival, Event, Lost, Ready, Warn
+from lfdfuse.robot.pose import Pose
+from lfdfuse.robot.readings import Observation
+from lfdfuse.robot.records import ScanRecord, no_return
 from lfdfuse.sim.loop import side_beam_index
-from lfdfuse.sim.robot import Pose
 from lfdfuse.sim.sensors import SensorParams
-from lfdfuse.sim.simulator import Observation, Simulator
-from lfdfuse.sources.importers.records import ScanRecord, no_return
+from lfdfuse.sim.simulator import Simulator
 from lfdfuse.world.model import World
 
 EPOCH_NS = 1_700_000_000_000_000_000

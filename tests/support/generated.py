@@ -25,9 +25,9 @@ from lfdfuse.execute.check import CHECK_STARTS
 from lfdfuse.execute.starts import perturbed_starts, wilson_interval
 from lfdfuse.log.reader import read_run
 from lfdfuse.network.table import leaf_steps
+from lfdfuse.robot.pose import Pose
 from lfdfuse.segment.decisions import DecisionParams
 from lfdfuse.segment.read import SegmentedRun, read_segmented
-from lfdfuse.sim.robot import Pose
 from lfdfuse.sources.tasks import Leg
 from tests.support.generated_worlds import generate_offroute
 from tests.support.offroute import OffRouteCase, run_starts

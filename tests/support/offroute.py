@@ -22,7 +22,7 @@ from lfdfuse.errors import LfdError
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.execute.run import ExecuteOptions, drive_table
 from lfdfuse.network.table import FusionTable
-from lfdfuse.sim.robot import Pose
+from lfdfuse.robot.pose import Pose
 from lfdfuse.sources.tasks import Leg
 from lfdfuse.world.model import World, check_pose_free, load_world
 

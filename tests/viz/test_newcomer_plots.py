@@ -21,7 +21,7 @@ from lfdfuse.behaviors.primitives import PRESETS
 from lfdfuse.cli.main import app
 from lfdfuse.cli.render import bac_names
 from lfdfuse.evaluate.plot_data import GoalMark, PathData, load_log, scan_points
-from lfdfuse.sim.sensors import ScanGeometry
+from lfdfuse.robot.readings import ScanGeometry
 from lfdfuse.viz import colors
 from lfdfuse.viz.plot import map_figure, save_figure, table_figure
 from lfdfuse.world.model import load_world

@@ -20,8 +20,8 @@ from lfdfuse.log import lfd
 from lfdfuse.log.reader import Run as RunLog
 from lfdfuse.log.reader import iter_messages, read_run
 from lfdfuse.network.table import FusionTable, write_table
+from lfdfuse.robot.pose import Pose
 from lfdfuse.sim.loop import side_beam_index
-from lfdfuse.sim.robot import Pose
 from lfdfuse.sources.tasks import Leg
 from lfdfuse.world.model import World, load_world
 

@@ -19,16 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from lfdfuse.sources.importers.records import (
-    CommandRecord,
-    Mount,
-    PoseRecord,
-    ScanRecord,
-    SourceError,
-    SourceInfo,
-    TopicChoice,
-    no_return,
-)
+from lfdfuse.robot.mount import Mount
+from lfdfuse.robot.records import CommandRecord, PoseRecord, ScanRecord, no_return
+from lfdfuse.sources.importers.records import SourceError, SourceInfo, TopicChoice
 
 NAME = "breezyslam"
 FIRST_RANGE = 24

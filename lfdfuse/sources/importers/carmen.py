@@ -27,17 +27,9 @@ from typing import IO, TypeVar
 
 import numpy as np
 
-from lfdfuse.sources.importers.records import (
-    CommandRecord,
-    Mount,
-    PoseRecord,
-    ScanRecord,
-    SourceError,
-    SourceInfo,
-    TopicChoice,
-    no_return,
-    stamp_ns,
-)
+from lfdfuse.robot.mount import Mount
+from lfdfuse.robot.records import CommandRecord, PoseRecord, ScanRecord, no_return
+from lfdfuse.sources.importers.records import SourceError, SourceInfo, TopicChoice, stamp_ns
 
 NAME = "carmen"
 _LASERS = ("FLASER", "RLASER")

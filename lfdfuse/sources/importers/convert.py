@@ -12,7 +12,6 @@ commands derived from the poses (``cmd_from=odom``, or when the log has none); `
 
 from __future__ import annotations
 
-import math
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,11 +22,13 @@ import numpy as np
 from lfdfuse import __version__
 from lfdfuse.log import LogWriter
 from lfdfuse.log.messages import frame_transform, laser_scan, pose_in_frame, target_detections, twist
-from lfdfuse.sim.sensors import Detection, ScanGeometry
+from lfdfuse.robot.mount import Mount, base_geometry
+from lfdfuse.robot.readings import Detection, ScanGeometry
+from lfdfuse.robot.records import ScanRecord, same_geometry
 from lfdfuse.sources.importers import open_source
 from lfdfuse.sources.importers.derive import commands_from_poses
 from lfdfuse.sources.importers.goals import REACH_M, Goal, goal_detections
-from lfdfuse.sources.importers.records import Mount, ScanRecord, SourceError, TopicChoice
+from lfdfuse.sources.importers.records import SourceError, TopicChoice
 
 ODOM_FRAME = "odom"
 CmdFrom = Literal["auto", "cmd", "odom"]
@@ -72,34 +73,6 @@ class ImportSummary:
     goals: tuple[str, ...] = ()
 
 
-def _wrap(a: float) -> float:
-    return math.atan2(math.sin(a), math.cos(a))
-
-
-def base_geometry(first: ScanRecord, mount: Mount) -> tuple[ScanGeometry, bool, bool]:
-    """Base-frame geometry of the scans, whether to reverse the beams, and whether to drop the last.
-
-    The last beam is dropped when it repeats the first one's bearing (a 361-beam 360° scan).
-    """
-    n, inc = first.count, first.increment_rad
-    closing = n > 2 and abs(abs(inc) * (n - 1) - 2 * math.pi) < abs(inc) / 2
-    n_out = n - 1 if closing else n
-    if mount.flipped:  # bearing in the base frame = yaw − sensor angle: reverse to keep it increasing
-        start = mount.yaw_rad - (first.start_rad + inc * (n_out - 1))
-    else:
-        start = mount.yaw_rad + first.start_rad
-    return ScanGeometry(_wrap(start), inc, n_out, first.max_range_m), mount.flipped, closing
-
-
-def _same_geometry(a: ScanRecord, b: ScanRecord) -> bool:
-    return (
-        a.count == b.count
-        and abs(a.start_rad - b.start_rad) < 1e-6
-        and abs(a.increment_rad - b.increment_rad) < 1e-9
-        and a.max_range_m == b.max_range_m
-    )
-
-
 def import_log(
     source: str | Path, *, out: str | Path, options: ImportOptions = ImportOptions()
 ) -> ImportSummary:
@@ -117,7 +90,7 @@ def import_log(
     first = scans[0]
     kept: list[ScanRecord] = []
     for s in scans:
-        if not _same_geometry(s, first):
+        if not same_geometry(s, first):
             src.dropped["scan: beam geometry differs from the first scan"] += 1
         elif kept and s.t_ns == kept[-1].t_ns:
             src.dropped["scan: same time stamp as the previous scan"] += 1

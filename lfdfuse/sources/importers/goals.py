@@ -24,7 +24,7 @@ import numpy as np
 
 from lfdfuse.errors import ConfigError
 from lfdfuse.files import read_yaml
-from lfdfuse.sim.sensors import Detection
+from lfdfuse.robot.readings import Detection
 
 REACH_M = 0.5  # a goal counts as reached this close (written as camera_reach_m)
 _NAME = re.compile(r"^[A-Za-z0-9_]+$")

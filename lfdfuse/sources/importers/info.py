@@ -14,8 +14,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from lfdfuse.robot.mount import Mount
 from lfdfuse.sources.importers import detect_format, open_source, ros1, ros2
-from lfdfuse.sources.importers.records import Mount, SourceError
+from lfdfuse.sources.importers.records import SourceError
 from lfdfuse.sources.importers.rosbag import BagTopic, bag_listing
 
 #: what each role of the import becomes in the demo

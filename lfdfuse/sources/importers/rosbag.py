@@ -10,7 +10,6 @@ clock.
 
 from __future__ import annotations
 
-import math
 from collections import Counter
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -25,23 +24,24 @@ from rosbags.rosbag2 import ReaderError as Reader2Error
 from rosbags.serde import SerdeError
 from rosbags.typesys import Stores, TypesysError, get_typestore
 
-from lfdfuse.sources.importers.records import (
-    CommandRecord,
-    Mount,
-    PoseRecord,
-    ScanRecord,
-    SourceError,
-    SourceInfo,
-    TopicChoice,
-    no_return,
+from lfdfuse.robot.mount import Mount, MountError
+from lfdfuse.robot.records import CommandRecord, PoseRecord, ScanRecord
+from lfdfuse.robot.ros import (
+    BASE_FRAMES,
+    frame_name,
+    laser_mount,
+    odometry_pose,
+    on_the_robot,
+    scan_record,
+    transform_matrix,
+    twist_command,
 )
+from lfdfuse.sources.importers.records import SourceError, SourceInfo, TopicChoice
 
 SCAN_TYPES = ("sensor_msgs/msg/LaserScan",)
 CMD_TYPES = ("geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped")
 ODOM_TYPES = ("nav_msgs/msg/Odometry",)
 TF_TOPICS = ("/tf_static", "/tf")
-_BASE_FRAMES = ("base_link", "base_footprint")
-_WORLD_FRAMES = ("odom", "map", "world", "earth")
 _READ_ERRORS = (
     AnyReaderError,
     Reader1Error,
@@ -60,36 +60,6 @@ def one_line(exc: BaseException, width: int = 200) -> str:
     return text if len(text) <= width else text[: width - 1] + "…"
 
 
-def _frame(name: str) -> str:
-    return name.lstrip("/")  # ROS 1 frames may carry a leading slash
-
-
-def _yaw(q: Any) -> float:
-    return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-
-
-def _matrix(tr: Any) -> np.ndarray:
-    """A ``geometry_msgs/Transform`` as a 4×4 homogeneous matrix."""
-    q, t = tr.rotation, tr.translation
-    w, x, y, z = q.w, q.x, q.y, q.z
-    m = np.eye(4)
-    m[:3, :3] = [
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ]
-    m[:3, 3] = [t.x, t.y, t.z]
-    return m
-
-
-def mount_of(m: np.ndarray) -> Mount:
-    """The planar mounting of a base→laser transform; a scanner tilted out of the plane is an error."""
-    flipped = m[2, 2] < 0.0
-    if abs(m[2, 2]) < 0.95:
-        raise SourceError("the laser is tilted out of the plane (its z axis is not vertical)")
-    return Mount(float(m[0, 3]), float(m[1, 3]), math.atan2(m[1, 0], m[0, 0]), bool(flipped))
-
-
 class BagSource:
     """A ROS 1 or ROS 2 bag opened for import (see the module docstring)."""
 
@@ -104,8 +74,8 @@ class BagSource:
             odom = _pick(conns, ODOM_TYPES, topics.odom, "/odom", "odometry")
             assert scan is not None
             self._topics = {"scan": scan, "cmd": cmd, "odom": odom}
-            scan_frame = self._first(r, scan, lambda m: _frame(m.header.frame_id)) or ""
-            base = self._first(r, odom, lambda m: _frame(m.child_frame_id)) if odom else None
+            scan_frame = self._first(r, scan, lambda m: frame_name(m.header.frame_id)) or ""
+            base = self._first(r, odom, lambda m: frame_name(m.child_frame_id)) if odom else None
             mount, used = self._mount(r, scan_frame, base)
         notes = [f"laser frame {scan_frame!r}" + (f", base frame {base!r}" if base else "")]
         self.info = SourceInfo(
@@ -142,43 +112,37 @@ class BagSource:
         return None
 
     def _mount(self, r: AnyReader, laser: str, base: str | None) -> tuple[Mount | None, str]:
-        bases = (base,) if base else _BASE_FRAMES
-        if laser in bases:
-            return Mount(), f"the scans are in the base frame {laser!r}"
-        edges: dict[str, tuple[str, np.ndarray, str]] = {}  # child → (parent, transform, topic)
-        for topic in TF_TOPICS:
+        bases = (base,) if base else BASE_FRAMES
+        edges: dict[str, tuple[str, np.ndarray]] = {}  # child → (parent, transform): the first one seen
+        topic_of: dict[str, str] = {}
+        for topic in TF_TOPICS if laser not in bases else ():  # scans in the base frame need no tf
             for _, msg in self._messages(r, topic):
                 for tr in msg.transforms:
-                    child, parent = _frame(tr.child_frame_id), _frame(tr.header.frame_id)
-                    if child not in edges and child not in bases and parent not in _WORLD_FRAMES:
-                        edges[child] = (parent, _matrix(tr.transform), topic)
-        frame, m, used = laser, np.eye(4), []
-        while frame not in bases and frame in edges:
-            parent, tf, topic = edges[frame]
-            m, frame = tf @ m, parent
-            used.append(topic)
-        if frame not in bases:
+                    child, parent = frame_name(tr.child_frame_id), frame_name(tr.header.frame_id)
+                    if child not in edges and on_the_robot(parent, child):
+                        edges[child], topic_of[child] = (parent, transform_matrix(tr.transform)), topic
+        try:
+            found = laser_mount(edges, laser, bases)
+        except MountError as exc:
+            raise SourceError(str(exc)) from exc
+        if found is None:
             return None, ""
-        return mount_of(m), f"{' + '.join(sorted(set(used)))} ({frame} → {laser})"
+        return found.mount, found.describe(" + ".join(sorted({topic_of[f] for f in found.frames})))
 
     def iter_scans(self) -> Iterator[ScanRecord]:
         with self._open() as r:
             for t_ns, m in self._messages(r, self._topics["scan"]):
-                max_m = round(float(m.range_max), 6)  # float32 in the message: 5.6 not 5.5999999
-                ranges = no_return(np.asarray(m.ranges, dtype=np.float64), min_m=m.range_min, max_m=max_m)
-                yield ScanRecord(t_ns, float(m.angle_min), float(m.angle_increment), ranges, max_m)
+                yield scan_record(m, t_ns)
 
     def iter_commands(self) -> Iterator[CommandRecord]:
         with self._open() as r:
             for t_ns, m in self._messages(r, self._topics["cmd"]):
-                tw = getattr(m, "twist", m)  # TwistStamped or Twist
-                yield CommandRecord(t_ns, float(tw.linear.x), float(tw.angular.z))
+                yield twist_command(m, t_ns)
 
     def iter_poses(self) -> Iterator[PoseRecord]:
         with self._open() as r:
             for t_ns, m in self._messages(r, self._topics["odom"]):
-                p = m.pose.pose
-                yield PoseRecord(t_ns, float(p.position.x), float(p.position.y), _yaw(p.orientation))
+                yield odometry_pose(m, t_ns)
 
 
 def _pick(

@@ -25,8 +25,8 @@ from foxglove.websocket import Capability, ChannelView, Client, ClientChannel, S
 from lfdfuse.errors import LfdError
 from lfdfuse.log import messages as msg
 from lfdfuse.log.schemas import schema_text
+from lfdfuse.robot.readings import Observation
 from lfdfuse.sim.sensors import SensorParams
-from lfdfuse.sim.simulator import Observation
 from lfdfuse.sources.teleop.inputs import Input
 from lfdfuse.world.model import World
 

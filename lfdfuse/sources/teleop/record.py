@@ -7,7 +7,7 @@ from typing import Protocol
 
 from lfdfuse.log import lfd
 from lfdfuse.log.writer import LogWriter
-from lfdfuse.sim.simulator import Observation
+from lfdfuse.robot.readings import Observation
 from lfdfuse.sources.teleop.inputs import SCHEMA, TOPIC, Input, teleop_input
 
 

@@ -35,10 +35,12 @@ import numpy as np
 from lfdfuse.errors import ConfigError
 from lfdfuse.log.recorder import Recorder, provenance
 from lfdfuse.log.writer import LogWriter
+from lfdfuse.robot.pose import Pose
+from lfdfuse.robot.readings import Observation
 from lfdfuse.sim.loop import GoalSource, RunSummary, Sink, run
-from lfdfuse.sim.robot import Pose, RobotParams
+from lfdfuse.sim.robot import RobotParams
 from lfdfuse.sim.sensors import CameraParams, SensorParams, target_reached
-from lfdfuse.sim.simulator import Observation, Simulator
+from lfdfuse.sim.simulator import Simulator
 from lfdfuse.sources.teleop.clock import Clock, WallClock
 from lfdfuse.sources.teleop.inputs import (
     Input,

@@ -1,6 +1,6 @@
 """The top-down view of a teleop run as a character grid (the terminal shows it; this draws it).
 
-Pure: a world, a :class:`~lfdfuse.sim.robot.Pose`, a scan and a trail in; lines of text out.
+Pure: a world, a :class:`~lfdfuse.robot.pose.Pose`, a scan and a trail in; lines of text out.
 A character cell is twice as tall as it is wide, like a terminal's. The whole map is shown
 when it fits at a useful scale, otherwise a window that follows the robot.
 
@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lfdfuse.sim.robot import Pose
-from lfdfuse.sim.sensors import ScanGeometry
+from lfdfuse.robot.pose import Pose
+from lfdfuse.robot.readings import ScanGeometry
 from lfdfuse.world.model import World
 
 WALL, LASER, TRAIL = "#", "*", "·"
