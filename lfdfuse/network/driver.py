@@ -18,7 +18,7 @@ import numpy as np
 
 from lfdfuse.behaviors.landmarks import OpeningSensor, ahead_range
 from lfdfuse.behaviors.primitives import ATTRACT, BehaviorParams, Observations, compute
-from lfdfuse.control.drive import heading_to_command
+from lfdfuse.control.command import heading_to_command
 from lfdfuse.control.safety import SafetyParams, free_heading
 from lfdfuse.errors import ConfigError
 from lfdfuse.network.landmarks import Cues

@@ -33,7 +33,7 @@ import pytest
 from typer.testing import CliRunner
 
 from lfdfuse.cli.main import app
-from lfdfuse.control.drive import DriveParams
+from lfdfuse.control.command import DriveParams
 from lfdfuse.errors import ConfigError
 from lfdfuse.log.reader import file_info, iter_messages
 from lfdfuse.log.schemas import schema
