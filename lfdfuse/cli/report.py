@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from lfdfuse.cli.app import app
-from lfdfuse.cli.common import console, err_console, user_errors
+from lfdfuse.cli.common import MAX_SEED, console, err_console, user_errors
 from lfdfuse.cli.parallel import one_executor, scheduler_option, workers_option
 from lfdfuse.parallel import open_executor
 
@@ -17,7 +17,9 @@ from lfdfuse.parallel import open_executor
 @user_errors
 def report_cmd(
     out: Path = typer.Option(Path("paper-report"), "--out", "-o", help="Folder of the report (created)."),
-    seed: int = typer.Option(1, "--seed", help="Seed of every demonstration, estimate and run."),
+    seed: int = typer.Option(
+        1, "--seed", min=0, max=MAX_SEED, help="Seed of every demonstration, estimate and run."
+    ),
     quick: bool = typer.Option(
         False,
         "--quick",

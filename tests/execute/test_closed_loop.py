@@ -109,7 +109,8 @@ def test_round_trip_heading_error_is_at_the_noise_floor(round_trip: tuple) -> No
 
 
 def test_round_trip_rows_the_data_pins_are_as_close_as_a_heading_fit(round_trip: tuple) -> None:  # type: ignore[type-arg]
-    """Issue 10's bar: where a least-squares heading fit pins a row (within 0.06, ≥ 200 samples)."""
+    """Where a least-squares heading fit pins a row (within 0.06, ≥ 200 samples), the estimate is
+    as close to the truth as the fit (the bar the README states)."""
     truth, learned, train, _test = round_trip
     rows = compare_rows(truth, learned, train, noise_rad=TEACHER_NOISE_RAD, min_samples=200)
     pinned = [r for r in rows if r.fit_l1 <= 0.06]

@@ -1,4 +1,4 @@
-"""Closed loop (issue 19): what a person at a keyboard teaches is learned.
+"""Closed loop: what a person at a keyboard teaches is learned.
 
 The scripted teacher becomes a person at a keyboard (``simulate --keys``: the nearest teleop key
 every period, jittered, held); the demo is segmented and estimated with the command line's

@@ -1,4 +1,4 @@
-"""Fusion tables at the boundary (issue 18): every number of a table is read through the shared
+"""Fusion tables at the boundary: every number of a table is read through the shared
 validator (type before arithmetic, finite, in range); a weighted attract behaviour needs its
 target in the world (DESIGN §8), an unweighted one does not."""
 
