@@ -13,8 +13,12 @@ from pathlib import Path
 
 from tests.conftest import ROOT
 
-#: a work round or a tracker entry by number; the words are split so this file does not match itself
-HISTORY = re.compile(r"\b(" + "st" + "op" + r" [0-9]{2}|" + "iss" + "ue" + r" [0-9]{1,2})\b", re.IGNORECASE)
+#: a work round or a tracker entry by number (one, several, or a range of rounds); the words are
+#: split so this file does not match itself
+ROUND, ENTRY = "st" + "op", "iss" + "ue"
+HISTORY = re.compile(
+    rf"\b({ROUND} [0-9]{{2}}|{ROUND}s [0-9]{{2}}[-–][0-9]{{2}}|{ENTRY}s? [0-9]{{1,2}})\b", re.IGNORECASE
+)
 #: text files a reader opens
 SUFFIXES = {".py", ".md", ".yaml", ".yml", ".json", ".toml", ".txt", ".cfg"}
 
@@ -36,12 +40,18 @@ def history_lines(text: str) -> list[tuple[int, str]]:
 
 
 def test_the_pattern_finds_rounds_and_tracker_entries_and_nothing_else() -> None:
-    cited = ["St" + "op 28 chose on tuning seeds", "as iss" + "ue 21 asks", "(ISS" + "UE 9)"]
+    cited = [
+        "St" + "op 28 chose on tuning seeds",
+        "developed in st" + "ops 26-27",
+        "as iss" + "ue 21 asks",
+        "(ISS" + "UE 9)",
+        "(iss" + "ues 15, 21)",
+    ]
     assert all(history_lines(s) for s in cited)
     innocent = [
         "the robot stops 20 cm short",
         "a stop 5 s long",
-        "issues 2 warnings",
+        "an issue tracker",
         "tissue 12",
         "nonstop 12",
     ]
