@@ -65,8 +65,8 @@ class DecisionParams:
     ``junctions`` and ``short_lag_m`` add decisions no divergence made: a teacher's turn off a
     corridor that goes on, and a spur just past a corner (sensed with sectors held closer).
 
-    Why these defaults: they were chosen on the tuning worlds of :mod:`lfdfuse.world.generate`
-    and kept only where they held on held-apart worlds. Every decision more is one more landmark
+    Why these defaults: they were chosen on generated off-route worlds set apart for tuning and
+    kept only where they held on held-apart ones. Every decision more is one more landmark
     the robot can miss, so the settings that find more of them (``max_gap`` 20, ``rise_steps``
     40, ``shape_steps`` 25, all sectors held 1.5 m back) complete fewer runs and stay off.
     ``shape`` is on: without it a corner is taken for the side opening the teacher turned into,
