@@ -25,7 +25,7 @@ from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run, estimate_ru
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.check import CHECK_STARTS, DemoWorld, demo_world
 from lfdfuse.execute.repair import Amends, Repair, repair
-from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.log.reader import Run
 from lfdfuse.network.table import FusionTable
 from lfdfuse.progress import Progress, part
@@ -234,7 +234,7 @@ def demonstrate(
             seed=seed,
             heading_noise_rad=heading_noise_rad,
         )
-        summary = drive_table(opts, out=raw, command="simulate", teacher=True).summary
+        summary = run_table(opts, out=raw, command="simulate", teacher=True).summary
         behaviors = behaviors or ",".join(teacher.behaviors)
     else:
         summary = simulate(

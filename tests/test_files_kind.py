@@ -1,4 +1,4 @@
-"""``files.kind_of``: which of our YAML files a document is, by its top level (issue 18)."""
+"""``files.kind_of``: which of our YAML files a document is, by its top level."""
 
 from __future__ import annotations
 

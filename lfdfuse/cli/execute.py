@@ -22,7 +22,7 @@ from lfdfuse.cli.execute_starts import execute_starts, starts_of
 from lfdfuse.cli.parallel import one_executor, scheduler_option, workers_option
 from lfdfuse.cli.render import print_report
 from lfdfuse.execute.report import write_report
-from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.execute.starts import StartsOptions
 from lfdfuse.network.table import load_table
 from lfdfuse.robot.pose import Pose
@@ -104,7 +104,7 @@ def execute_cmd(
         stop_on_collision=stop_on_collision,
     )
     with progress_bar("execute") as update:
-        res = drive_table(opts, out=out, command="execute", progress=update)
+        res = run_table(opts, out=out, command="execute", progress=update)
     if report is not None:
         write_report(res.report, report)
     print_report(res.report, out=str(out))

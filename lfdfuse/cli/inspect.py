@@ -182,7 +182,7 @@ def _inspect_yaml(file: Path) -> None:
         print_table(table)
         print_changes(table)  # pooled demos: the rows the later ones changed, before → after
         if any(s.network is not None for s in table.network.steps):
-            print_subgoals(table)  # sub-goals at decision points, in words (issue 15)
+            print_subgoals(table)  # sub-goals at decision points, in words
     elif kind is YamlKind.TASK:
         legs = parse_task(data, origin=str(file))
         console.print(f"[bold]{file}[/bold]  task of {len(legs)} leg(s)")

@@ -22,7 +22,7 @@ from lfdfuse.cli.common import (
 )
 from lfdfuse.cli.render import print_run
 from lfdfuse.errors import ConfigError
-from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.network.table import parse_table
 from lfdfuse.robot.pose import Pose
 from lfdfuse.sources.simulate import SimulateOptions, simulate
@@ -96,7 +96,7 @@ def simulate_cmd(
             sensor_noise_m=noise,
         )
         with progress_bar("simulate") as update:
-            res = drive_table(eopts, out=out, command="simulate", teacher=True, progress=update)
+            res = run_table(eopts, out=out, command="simulate", teacher=True, progress=update)
         print_run(res.summary, title=f"simulate {w.name} / network teacher {spec.name}")
         return
     opts = SimulateOptions(

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from lfdfuse.behaviors.catalogue import needs
-from lfdfuse.control.drive import command_to_heading
+from lfdfuse.control.command import command_to_heading
 from lfdfuse.drive.decode import LiveOdom, LiveScan, LiveTargets, LiveTf, LiveTwist
 from lfdfuse.drive.frames import ScanFrame, TfTree
 from lfdfuse.drive.safety import Limits, Watchdog

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from lfdfuse.control.drive import DriveParams
+from lfdfuse.control.command import DriveParams
 from lfdfuse.errors import ConfigError
 from lfdfuse.robot.limits import stated_limits
 

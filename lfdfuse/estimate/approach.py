@@ -1,4 +1,4 @@
-"""A goal step's rows with its goal in view, learned from the teacher's approach alone (issue 21).
+"""A goal step's rows with its goal in view, learned from the teacher's approach alone.
 
 A teacher steers at a goal only once near it; before that, with the goal already in view far
 ahead, they drive on in their style. The paper's rows are per BAC, and the BAC does not change

@@ -1,4 +1,4 @@
-"""Sub-goals at decision points in the fusion table (issue 15).
+"""Sub-goals at decision points in the fusion table.
 
 :func:`refine` takes the paper's table of a segmented demo (one fusion step per goal segment,
 :func:`lfdfuse.estimate.pipeline.estimate_run`) and replays its fusion over the demo

@@ -48,7 +48,7 @@ class ExecuteResult:
     report: dict[str, Any]
 
 
-def drive_table(
+def run_table(
     opts: ExecuteOptions, *, out: str | Path, command: str, teacher: bool = False, progress: Any = None
 ) -> ExecuteResult:
     """Run a fusion table in a world, log the run to ``out`` and build the report."""

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from lfdfuse.errors import ConfigError, LfdError
-from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.files import parse_yaml, read_text
 from lfdfuse.network.table import load_table
 from lfdfuse.parallel import Batch, Executor, Outcome
@@ -131,7 +131,7 @@ def run_start(job: StartJob) -> dict[str, Any]:
         stop_on_collision=job.stop_on_collision,
     )
     with tempfile.TemporaryDirectory(prefix="lfdfuse-start-") as tmp:
-        res = drive_table(opts, out=Path(tmp) / "run.mcap", command="execute")
+        res = run_table(opts, out=Path(tmp) / "run.mcap", command="execute")
     return res.report
 
 

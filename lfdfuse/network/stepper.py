@@ -22,7 +22,7 @@ import numpy as np
 from lfdfuse.behaviors.openings import OpeningSensor, ahead_range
 from lfdfuse.behaviors.primitives import BehaviorParams, BehaviorState, Observations, compute
 from lfdfuse.behaviors.spec import attract_target
-from lfdfuse.control.drive import heading_to_command
+from lfdfuse.control.command import heading_to_command
 from lfdfuse.control.safety import SafetyParams, free_heading
 from lfdfuse.errors import ConfigError
 from lfdfuse.log.lfd import HelpReason

@@ -1,4 +1,4 @@
-"""Decision points: where the teacher left the route the learned fusion would have taken (issues 15, 21).
+"""Decision points: where the teacher left the route the learned fusion would have taken.
 
 A goal segment's fusion weights reproduce *how* the teacher steered; they cannot know *where*
 the teacher turned off toward a goal still out of view. A decision point is found by replaying
@@ -57,66 +57,22 @@ from lfdfuse.segment.track import (
 class DecisionParams:
     """What a decision point is, and how its landmarks are written.
 
-    The defaults were chosen on the first 40 tuning worlds of :mod:`lfdfuse.world.generate`
-    (the three-goal task, 3 perturbed starts each, :mod:`lfdfuse.evaluate.generated`; issue
-    21), runs completed of 120: without sub-goals 56; issue 15's landmark (every onset counted,
-    corners turned round counted as decisions) 45 of the first 60; openings ``passed`` by,
-    corners skipped, the turn looked at ``settle_steps`` past the onset and at least its whole
-    less ``turn_margin_rad`` 91; with ``min_area`` 1.0 94 (these three before the driver's fixes
-    of turns on the spot); with ``lookahead`` 40 101 (the ``distance`` cue 101 too, run for
-    run). With the opening's ``shape`` 98 (all 40 worlds run again on this code: it loses one,
-    seed 8, where the robot never meets the 3rd *side* opening on the right and drives past the
-    spur); without it the ``ring-spur`` table of bench suite ``offroute`` completed none of its
-    4 starts, in ``ring-spur`` and in ``ring-spur-large`` (with it 4/4 each: a corner is not the
-    side opening the teacher turned into), and the single-demo path must hold, so it is on. A wait past the onset at a T
-    before turning completed 103/120, but two of the three spur exits it fixed completed the
-    long way round the ring, and it broke three other worlds: left out. What still fails: a
-    spur entered a few metres past the corner before it (its onset is not sensed while the
-    sectors are held through the corner's turn), and the exit of a spur off the ring's inside
-    (the turn on the spot at the mouth ends short of the corridor, and the rest of the step
-    drives back in). On the held-apart seeds, never tuned on, 36/60 (seeds 1000-1019, 31
-    without sub-goals) and 38/60 (1020-1039, 21 without); on seeds 1040-1079, never looked at,
-    86/120 (43 without): issue 21 asks for 90 %. ``max_gap`` 20, ``rise_steps`` 40 and
-    ``shape_steps`` 25 find decisions these defaults miss (a divergence broken up as the
-    teacher turned, a spur just past a corner, the shape read after a cut-in), and were measured
-    in stop 27 on seeds 1000-1039: 71/120 (74 with the defaults) — every decision more is one
-    more landmark to miss. Kept as parameters, the defaults unchanged.
+    A decision is a divergence — the demo's heading leaves the fused one (both smoothed over
+    ``smooth_steps``) by more than ``divergence_rad`` for ``min_steps`` steps and ``min_area`` in
+    all — where the teacher really turned (``min_turn_rad``) at an opening met ``lookback`` steps
+    before to ``lookahead`` after it. Its turn landmark is ``turn_share`` of the teacher's turn
+    and no less than the largest less ``turn_margin_rad``, read ``settle_steps`` past the onset.
+    ``junctions`` and ``short_lag_m`` add decisions no divergence made: a teacher's turn off a
+    corridor that goes on, and a spur just past a corner (sensed with sectors held closer).
 
-    Stop 28 chose on tuning seeds 100-139 (120 runs; these defaults 86): the three knobs above
-    (20, 40, 25) 95; with a turn landmark met when it stalls up to 25° short, a turn steered
-    only toward its side and a hold after it (no further than the teacher for 3 m) 101; with an
-    opening's ``open`` shape read over the robot's last 25 ticks too 107. On 80 fresh held-apart
-    worlds (seeds 1080-1159, 240 runs) the 101-variant completed 171, these defaults 169 (93 vs
-    80 on 1080-1119, 41 vs 44 and 28 vs 36 on 1120-1139 and 1140-1159), the 107-variant 81 of
-    the 120 on 1120-1159 where these defaults completed 89: the tuning gain did not carry, and
-    the defaults stay. The failures the variants fixed were traced (the way out of a spur), and
-    so were some they added: a corner met in BACs the sub-step after the turn never saw, where
-    the default weights turned the robot round.
-
-    Stop 29 classified every failed run on tuning seeds 100-179 (these defaults: 173 of 240):
-    no decision in green's step 19 (the spur just past a corner, where the fusion replayed on
-    the teacher's track turns where the teacher already turns: no divergence), a side opening
-    entered in a drive-on step 12, the spur passed 7, after green 29. ``junctions`` (the
-    teacher's own turns off a way that goes on, where no divergence made a decision) 183, every
-    world it changed won; with the runtime's drive-on rule
-    (:data:`~lfdfuse.network.runtime.DRIVE_ON_RAD`) 189. Confirmed once on 40 fresh held-apart
-    worlds (seeds 1180-1219, 120 runs): these defaults without either 82, with ``junctions`` 88,
-    with both 91 (no world lost); without sub-goals 63. Then on 40 more (1220-1259): 66, 79, 78
-    (the drive-on rule won one world and lost two there), 45 without. Both are on: over the 80
-    fresh worlds 148 → 169 of 240 (62 % → 70 %). Written with the turns of
-    the way out of a spur too (the way ahead closed: a T), it completed 166 on the tuning seeds:
-    left out.
-
-    Stop 35 (``short_lag_m``): of the 30 failed runs on fresh seeds 1480-1559, 18 had no decision
-    in green's step, a spur a few metres past a corner (1484, 1496, 1519, 1520, 1528, 1538). Every
-    sector held 1.5 m back instead of 2 m found green's decision in three of them, but completed
-    86 → 70 of the first 90 tuning runs: left out. Looked for with sectors held 1.5 m back only
-    where the default ones make no decision of a teacher's turn, these six worlds complete 5 of
-    their 18 runs (none before; 1520 2, 1538 3; 1484 decides green and fails at blue's T; the other
-    three still find nothing). On 80 fresh worlds (1560-1639) it changed no table: 114 and 109 of
-    120 as before (run with the flag of every refine: a decision with ``lag_m`` was made in two
-    worlds' candidates, and neither's table changed). Not run again on the tuning seeds; there,
-    world 117 now decides green's turn at once where the check had to repair the table.
+    Why these defaults: they were chosen on generated off-route worlds set apart for tuning and
+    kept only where they held on held-apart ones. Every decision more is one more landmark
+    the robot can miss, so the settings that find more of them (``max_gap`` 20, ``rise_steps``
+    40, ``shape_steps`` 25, all sectors held 1.5 m back) complete fewer runs and stay off.
+    ``shape`` is on: without it a corner is taken for the side opening the teacher turned into,
+    and the ``ring-spur`` table of ``make bench`` suite ``offroute`` completes none of its starts.
+    The rate these defaults reach, and the command that measures it: the README, "Goals off the
+    route".
     """
 
     divergence_rad: float = math.radians(15.0)  # demo vs fused heading (smoothed): a different way

@@ -14,7 +14,7 @@ import re
 import numpy as np
 
 from lfdfuse.behaviors.primitives import Observations
-from lfdfuse.control.drive import DriveParams, command_to_vector
+from lfdfuse.control.command import DriveParams, command_to_vector
 from lfdfuse.errors import LfdError, LogError
 from lfdfuse.files import parse_yaml
 from lfdfuse.log.reader import Run, hold

@@ -18,7 +18,7 @@ import numpy as np
 from scipy.optimize import nnls
 
 from lfdfuse.behaviors.primitives import BehaviorOutputs
-from lfdfuse.control.drive import DriveParams
+from lfdfuse.control.command import DriveParams
 from lfdfuse.log.reader import Run
 from lfdfuse.segment.demo import demonstrated
 

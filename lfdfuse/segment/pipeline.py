@@ -25,7 +25,7 @@ from lfdfuse.behaviors.primitives import (
     compute,
     resolve_behaviors,
 )
-from lfdfuse.control.drive import DriveParams
+from lfdfuse.control.command import DriveParams
 from lfdfuse.errors import LogError
 from lfdfuse.log import lfd
 from lfdfuse.log.reader import check_log_file, iter_attachments, iter_raw, meta_float, read_run

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lfdfuse.control.drive import DriveParams
+from lfdfuse.control.command import DriveParams
 from lfdfuse.robot.pose import Pose
 from lfdfuse.world.raycast import RayCaster
 

@@ -15,10 +15,10 @@ from lfdfuse.sim.loop import Progress, RunSummary, run
 from lfdfuse.sim.robot import RobotParams
 from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.sim.simulator import Simulator
-from lfdfuse.sources.keyboard import KeyboardParams, KeyboardPerson, PressRecorder
 from lfdfuse.sources.planner import Planner
 from lfdfuse.sources.tasks import Leg
 from lfdfuse.sources.teachers import StyleTeacher, TeacherParams
+from lfdfuse.sources.typist import KeyboardParams, KeyboardPerson, PressRecorder
 from lfdfuse.world.model import World, check_pose_free
 
 

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from lfdfuse.control.drive import DriveParams, heading_to_command
+from lfdfuse.control.command import DriveParams, heading_to_command
 from lfdfuse.control.safety import SafetyParams, free_heading
 from lfdfuse.files import YamlKind, kind_of, read_yaml
 from lfdfuse.robot.pose import Pose

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
-from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.network.table import FusionTable
 from lfdfuse.robot.pose import Pose
 from lfdfuse.segment.pipeline import segment_file
@@ -103,7 +103,7 @@ def three_goals(
     """Whether each run from ``starts`` reached red, green, blue in order without a collision."""
     out = []
     for k, start in enumerate(starts):
-        res = drive_table(
+        res = run_table(
             ExecuteOptions(
                 world=load_world("building"), table=table, start=Pose(*start), max_time_s=300.0, seed=k
             ),
@@ -122,7 +122,7 @@ def tee_branches(table: FusionTable, *, folder: Path, label: str) -> list[bool |
     """At each tee junction: True if the run went left, False right, None neither."""
     out = []
     for k, (start, junction) in enumerate(TEE_JUNCTIONS):
-        res = drive_table(
+        res = run_table(
             ExecuteOptions(world=load_world("tee"), table=table, start=Pose(*start), max_time_s=30.0, seed=k),
             out=folder / f"{label}-tee{k}.mcap",
             command="bench",

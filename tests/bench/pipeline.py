@@ -283,7 +283,7 @@ def bench_estimate(rows: list[Row], folder: Path) -> None:
 
 
 def bench_execute(rows: list[Row], folder: Path) -> None:
-    from lfdfuse.execute.run import ExecuteOptions, drive_table
+    from lfdfuse.execute.run import ExecuteOptions, run_table
     from lfdfuse.learn import demonstrate, learn
 
     world = load_world("building")
@@ -292,7 +292,7 @@ def bench_execute(rows: list[Row], folder: Path) -> None:
     sim_rate = demo.steps / demo.wall_s
     table = learn([demo.segmented]).table
     t0 = time.perf_counter()
-    r = drive_table(
+    r = run_table(
         ExecuteOptions(world=world, table=table, max_time_s=300.0), out=folder / "run.mcap", command="execute"
     )
     rows.append(

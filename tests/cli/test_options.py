@@ -1,4 +1,4 @@
-"""Options are typed (issue 18): typer checks ranges and choices; out of range or a bad choice is
+"""Options are typed: typer checks ranges and choices; out of range or a bad choice is
 a usage error (exit 2, click's message) before any work, the same in every command."""
 
 from __future__ import annotations
@@ -21,8 +21,6 @@ runner = CliRunner()
 #: numbers whose range only the library can judge (an open interval, a lag against the log,
 #: a robot's limit that must be positive): they stay one ``error:`` line, exit 1
 LIBRARY_RANGES = {("evaluate", "holdout"), ("segment", "lag"), ("import", "v_max"), ("import", "omega_max")}
-#: commands whose options are another helper's in issue 18 (cli/estimate.py, cli/report.py)
-NOT_YET = {"estimate", "report"}
 
 
 def _options() -> list[tuple[str, typing.Any]]:
@@ -33,7 +31,7 @@ def _options() -> list[tuple[str, typing.Any]]:
 def test_every_number_has_its_range_declared() -> None:
     for command, p in _options():
         kind = p.type_descriptor.annotation
-        if command in NOT_YET or kind not in (int, float) or (command, p.name) in LIBRARY_RANGES:
+        if kind not in (int, float) or (command, p.name) in LIBRARY_RANGES:
             continue
         assert p.min is not None or p.max is not None, f"{command} --{p.name}: a number without a range"
 
@@ -49,8 +47,6 @@ def test_every_choice_is_an_enum_typer_offers() -> None:
         ("plot", "whiskers"),
     }
     for command, p in enums:
-        if command in NOT_YET:
-            continue
         res = runner.invoke(app, [command, "--help"], env={"COLUMNS": "200"})
         assert res.exit_code == 0
         for member in p.type_descriptor.annotation:

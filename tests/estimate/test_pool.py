@@ -1,4 +1,4 @@
-"""Pooling demos (issue 21): goal matching, corrections that change only the rows they touch,
+"""Pooling demos: goal matching, corrections that change only the rows they touch,
 the real CLI end to end."""
 
 from __future__ import annotations

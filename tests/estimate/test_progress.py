@@ -1,8 +1,8 @@
-"""Long estimates report real progress while they work (issue 23, item 6).
+"""Long estimates report real progress while they work.
 
-``estimate --trials 30`` used to show ``0%`` for its whole run: the callback fired only at the
-end. Every method now tells its ``progress`` as it goes — the tempered SMC every iteration, the
-paper's filter every few updates, the baselines per row — and the fraction only grows.
+A callback fired only at the end would show ``0%`` for the whole of ``estimate --trials 30``.
+Every method tells its ``progress`` as it goes — the tempered SMC every iteration, the paper's
+filter every few updates, the baselines per row — and the fraction only grows.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Issue 21: where a learned table fails, one scripted correction and a re-estimate fix it.
+"""Where a learned table fails, one scripted correction and a re-estimate fix it.
 
 The ring-spur task learned without sub-goals (:mod:`tests.support.offroute`: seed 1 demo,
 seed 0 estimate) reaches red and green, then shuttles in the dead-end spur after green and never

@@ -16,7 +16,7 @@ from lfdfuse.behaviors.primitives import BehaviorOutputs
 from lfdfuse.cli.main import app
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
-from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.log.reader import iter_messages
 from lfdfuse.network.runtime import NetworkRuntime
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step, dump_table
@@ -99,7 +99,7 @@ def test_a_network_nested_two_levels_drives_the_task(three_goal_table: FusionTab
         ),
     )
     table = replace(three_goal_table, network=nested)
-    res = drive_table(
+    res = run_table(
         ExecuteOptions(world=load_world("building"), table=table, max_time_s=300),
         out=tmp_path / "n.mcap",
         command="execute",
@@ -158,7 +158,7 @@ def test_execute_cli_writes_log_report_and_overlay(three_goal_table: FusionTable
 
 def test_execute_is_reproducible(three_goal_table: FusionTable, tmp_path: Path) -> None:
     for name in ("a", "b"):
-        drive_table(
+        run_table(
             ExecuteOptions(
                 world=load_world("building"),
                 table=three_goal_table,
@@ -218,7 +218,7 @@ def test_execute_bad_input(three_goal_table: FusionTable, tmp_path: Path) -> Non
     finally:
         os.chdir(old)
     with pytest.raises(ConfigError, match="lacks"):
-        drive_table(
+        run_table(
             ExecuteOptions(world=load_world("corridor"), table=three_goal_table),
             out=tmp_path / "x.mcap",
             command="execute",

@@ -1,4 +1,4 @@
-"""Goals off the style's route (issue 15): sub-goals at decision points, closed loop and unit laws.
+"""Goals off the style's route: sub-goals at decision points, closed loop and unit laws.
 
 The full table (two buildings, the teacher's start and 10 perturbed starts, with and without
 sub-goals) is the ``offroute`` benchmark; here one building, two starts, and the pieces.
@@ -459,7 +459,7 @@ def test_the_turn_out_of_a_spur_keeps_to_its_side_and_then_to_the_corridor(
 
 
 def test_a_spur_just_past_a_corner_is_decided_and_driven_with_the_shorter_lag(tmp_path: Path) -> None:
-    """Generated world 1538 (held apart; stop 34: no decision in green's step): green sits in a
+    """Generated world 1538 (held apart): green sits in a
     spur on the right a few metres past a corner left. The default sectors still swing through
     the corner's turn as the teacher passes the spur and sense no opening there; the sensor
     holding its sectors 1.5 m back does. The sub-goal table (no check) names that lag in green's

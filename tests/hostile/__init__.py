@@ -1,1 +1,1 @@
-"""The adversarial suite (issue 13): generated hostile inputs against the whole CLI."""
+"""The adversarial suite: generated hostile inputs against the whole CLI."""

@@ -1,4 +1,4 @@
-"""The boundary classes of issue 18, as hostile cases: numbers past a float, mapping keys that are
+"""The readers' boundary classes as hostile cases: numbers past a float, mapping keys that are
 not names, lengths that claim more than the file holds, times past int64, metadata that is not a
 number, weighted targets the world lacks, and a long task that is valid.
 

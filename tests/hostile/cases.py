@@ -585,7 +585,7 @@ def _special_setup(kind: str) -> Callable[[Path], None] | None:
 
 def cli_values() -> Iterator[Case]:
     sim = ("simulate", "--world", "corridor", "--duration", "1", "-o", "o.mcap")
-    # option ranges are typer's (issue 18): out of range is a usage error, exit 2
+    # option ranges are typer's: out of range is a usage error, exit 2
     sim_cases: list[tuple[tuple[str, ...], frozenset[int]]] = [
         (("--seed", "-1"), USAGE),
         (("--seed", str(2**64)), USAGE),

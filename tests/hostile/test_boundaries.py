@@ -1,4 +1,4 @@
-"""The readers' boundary laws (issue 18), one class at a time, below the CLI: the YAML loader, the
+"""The readers' boundary laws, one class at a time, below the CLI: the YAML loader, the
 shared numeric validator, the MCAP reader's lengths and times, stamps, metadata, and tasks."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The hostile corpus against the CLI (issue 13). ``make test`` runs a sample of every class;
+"""The hostile corpus against the CLI. ``make test`` runs a sample of every class;
 ``make fuzz`` (``LFDFUSE_FUZZ=1``) runs all of it."""
 
 from __future__ import annotations

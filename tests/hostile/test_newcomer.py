@@ -1,4 +1,4 @@
-"""Issue 13's newcomer defects, one test each, and the limits of the file readers (with hypothesis)."""
+"""Defects a newcomer meets first, one test each, and the limits of the file readers (with hypothesis)."""
 
 from __future__ import annotations
 
@@ -114,7 +114,7 @@ def test_world_errors_name_the_key_or_problem(text: str, message: str) -> None:
 
 def test_start_in_the_wrong_format_and_negative_noise_are_clear_errors(tmp_path: Path) -> None:
     """A pose only the library can read is one error line (exit 1); a number out of the range
-    ``--help`` shows is a usage error naming the option (exit 2, issue 18)."""
+    ``--help`` shows is a usage error naming the option (exit 2)."""
     for args, message, code in (
         (["--start", "1 2 0"], "X,Y,THETA", 1),
         (["--sensor-noise", "-0.1"], "--sensor-noise", 2),

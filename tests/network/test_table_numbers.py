@@ -1,4 +1,4 @@
-"""Fusion tables at the boundary (issue 18): every number of a table is read through the shared
+"""Fusion tables at the boundary: every number of a table is read through the shared
 validator (type before arithmetic, finite, in range); a weighted attract behaviour needs its
 target in the world (DESIGN §8), an unweighted one does not."""
 
@@ -13,7 +13,7 @@ import pytest
 import yaml
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.network.table import dump_table, parse_table
 from lfdfuse.world.model import load_world
 
@@ -123,7 +123,7 @@ def test_execute_refuses_a_weighted_target_the_world_lacks_before_writing(tmp_pa
     table = parse_table(_attract({"avoid": 0.3, "attract_purple": 0.7}))
     out = tmp_path / "r.mcap"
     with pytest.raises(ConfigError, match="purple"):
-        drive_table(
+        run_table(
             ExecuteOptions(world=load_world("corridor"), table=table, max_time_s=0.5), out=out, command="t"
         )
     assert not out.exists() and not list(tmp_path.iterdir())
@@ -132,7 +132,7 @@ def test_execute_refuses_a_weighted_target_the_world_lacks_before_writing(tmp_pa
 def test_execute_runs_a_table_whose_target_carries_no_weight(tmp_path: Path) -> None:
     table = parse_table(_attract({"avoid": 0.3, "wander_left": 0.7, "attract_purple": 0.0}))
     out = tmp_path / "r.mcap"
-    res = drive_table(
+    res = run_table(
         ExecuteOptions(world=load_world("corridor"), table=table, max_time_s=0.5), out=out, command="t"
     )
     assert out.exists() and res.summary is not None

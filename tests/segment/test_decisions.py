@@ -149,7 +149,7 @@ def _find(
 
 
 def test_a_divergence_broken_up_while_the_teacher_turns_is_one_decision() -> None:
-    """Two bursts 10 steps apart, each too small to be a decision alone (issue 21: at a spur the
+    """Two bursts 10 steps apart, each too small to be a decision alone (at a spur the
     fused heading swings with the BACs as the teacher turns in): one, when runs 20 steps apart
     are joined."""
     turn = np.zeros(N)

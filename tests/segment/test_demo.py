@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse.control.drive import DriveParams, vector_to_command
+from lfdfuse.control.command import DriveParams, vector_to_command
 from lfdfuse.errors import LogError
 from lfdfuse.log.reader import Run
 from lfdfuse.robot.readings import Detection, ScanGeometry

@@ -1,4 +1,4 @@
-"""What ``segment_file`` measures beside the log: the step time and the best command lag (issue 18)."""
+"""What ``segment_file`` measures beside the log: the step time and the best command lag."""
 
 from __future__ import annotations
 

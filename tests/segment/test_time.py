@@ -10,7 +10,7 @@ import numpy as np
 import orjson
 import pytest
 
-from lfdfuse.control.drive import DriveParams, command_to_heading
+from lfdfuse.control.command import DriveParams, command_to_heading
 from lfdfuse.log import LogWriter
 from lfdfuse.log import messages as msg
 from lfdfuse.log.reader import file_info, iter_attachments, iter_raw

@@ -353,7 +353,7 @@ def test_installed_command_end_to_end(tmp_path: Path) -> None:
 
 
 def test_robot_limits_ignore_a_wild_command_and_say_so() -> None:
-    """Issue 19: one wild command once gave a Neato a v_max of 19.9 m/s."""
+    """One wild command among a Neato's commands must not set its v_max (it would read 19.9 m/s)."""
     import numpy as np
 
     from lfdfuse.sources.importers.convert import ImportOptions, _limits

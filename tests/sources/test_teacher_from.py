@@ -1,4 +1,4 @@
-"""``teacher_from``: a ``--teacher`` spec into a typed teacher, every error before a run (issue 18)."""
+"""``teacher_from``: a ``--teacher`` spec into a typed teacher, every error before a run."""
 
 from __future__ import annotations
 

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from lfdfuse.control.drive import DriveParams
+from lfdfuse.control.command import DriveParams
 from lfdfuse.errors import LfdError
 from lfdfuse.robot.readings import ScanGeometry
 from lfdfuse.sim.loop import run

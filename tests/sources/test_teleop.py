@@ -33,7 +33,7 @@ import pytest
 from typer.testing import CliRunner
 
 from lfdfuse.cli.main import app
-from lfdfuse.control.drive import DriveParams
+from lfdfuse.control.command import DriveParams
 from lfdfuse.errors import ConfigError
 from lfdfuse.log.reader import file_info, iter_messages
 from lfdfuse.log.schemas import schema
@@ -259,8 +259,8 @@ def test_a_signal_during_the_wall_clock_wait_ends_the_run_at_the_next_period(
     tmp_path: Path, after_s: float
 ) -> None:
     """Real SIGINTs through :func:`stop_on_signals` while a real-time run paces itself: the run
-    ends with the signal's name within a period or two and saves its log. (The handler used to
-    set a ``threading.Event`` whose own lock the waiting loop could hold: a rare hang on Ctrl-C.)"""
+    ends with the signal's name within a period or two and saves its log. (A handler that
+    set a ``threading.Event`` whose own lock the waiting loop could hold would hang on Ctrl-C, rarely.)"""
     opts = TeleopOptions(world=load_world("building"), input_name="test")
     session = make_session(opts, inputs=[Fed({0.0: key("i")})])  # the wall clock
     main, sent = threading.get_ident(), []

@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 
 from lfdfuse.cli.main import app
 from lfdfuse.execute.correct import CorrectionResult, correct, correction_driver
-from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.log import lfd
 from lfdfuse.log.reader import file_info, iter_messages
 from lfdfuse.network.table import FusionTable, dump_table, load_table
@@ -98,7 +98,7 @@ def test_until_the_first_input_the_run_is_the_execute_run(
         tmp_path, {first_s: key("j"), 7.0: key("h")}, seed=seed, noise_m=noise_m, start=start, duration_s=10.0
     )
     ex = tmp_path / "x.mcap"
-    drive_table(
+    run_table(
         ExecuteOptions(
             world=_world(), table=_table(), start=start, max_time_s=10.0, seed=seed, sensor_noise_m=noise_m
         ),
@@ -118,7 +118,7 @@ def test_until_the_first_input_the_run_is_the_execute_run(
 def test_without_input_the_whole_run_is_the_execute_run(tmp_path: Path) -> None:
     _, corr = _correct(tmp_path, {}, seed=5, noise_m=0.03, duration_s=6.0)
     ex = tmp_path / "x.mcap"
-    drive_table(
+    run_table(
         ExecuteOptions(world=_world(), table=_table(), max_time_s=6.0, seed=5, sensor_noise_m=0.03),
         out=ex,
         command="execute",
@@ -269,11 +269,11 @@ def test_execute_reports_help_too_and_a_sure_table_asks_for_none(tmp_path: Path)
             steps=(replace(step, fusion=tuple(replace(step.fusion[0], bac=b) for b in range(64))),),
         ),
     )
-    rep = drive_table(
+    rep = run_table(
         ExecuteOptions(world=_world(), table=everything, max_time_s=5.0), out=tmp_path / "a.mcap", command="t"
     ).report
     assert rep["help"] == [] and _by_tick(tmp_path / "a.mcap", "/lfd/network") == {}
-    rep = drive_table(
+    rep = run_table(
         ExecuteOptions(world=_world(), table=_unsure(sure), max_time_s=5.0),
         out=tmp_path / "b.mcap",
         command="t",

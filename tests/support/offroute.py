@@ -20,7 +20,7 @@ import numpy as np
 from lfdfuse import learn
 from lfdfuse.errors import LfdError
 from lfdfuse.estimate.pipeline import EstimateOptions
-from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.network.table import FusionTable
 from lfdfuse.robot.pose import Pose
 from lfdfuse.sources.tasks import Leg
@@ -103,7 +103,7 @@ def run_starts(
     rows = []
     w = load_world(world) if world is not None else case.load()
     for k, start in enumerate(starts):
-        res = drive_table(
+        res = run_table(
             ExecuteOptions(world=w, table=table, start=Pose(*start), max_time_s=case.max_time_s, seed=k),
             out=folder / f"{label.replace('/', '-')}-{k}.mcap",
             command="bench",

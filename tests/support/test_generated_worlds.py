@@ -1,4 +1,4 @@
-"""Generated off-route worlds (issue 21): seeded, valid, and varied as the spec says."""
+"""Generated off-route worlds: seeded, valid, and varied as the spec says."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Plots as a newcomer reads them (issue 23, item 10): the legend whole in the saved file, one
+"""Plots as a newcomer reads them: the legend whole in the saved file, one
 colour per step, a target's name clear of its goal star, one abbreviation table for plots and
 the terminal, and an imported log drawn over the walls its own scans saw."""
 
@@ -40,7 +40,7 @@ def _run_data(world: str, steps: int, goals: int) -> PathData:
     pose = np.column_stack([x0 + 1 + (x1 - x0 - 2) * t, np.full(n, (y0 + y1) / 2), np.zeros(n)])
     part = np.minimum((t * steps).astype(np.int64), steps - 1)
     names = tuple(f"reach-target-{i}/to-left-opening-{i}" for i in range(steps))
-    # the robot stops short of a target on any side: up and right (where a name used to go), right, above
+    # the robot stops short of a target on any side: up and right (where a name at a fixed offset would sit), right, above
     sides = [math.radians(a) for a in (45.0, 0.0, 90.0)]
     marks = tuple(
         GoalMark(tg.name, tg.x + 0.6 * math.cos(a), tg.y + 0.6 * math.sin(a), float(i))

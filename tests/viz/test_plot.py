@@ -17,7 +17,7 @@ from typer.testing import CliRunner
 from lfdfuse.cli.main import app
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.evaluate.plot_data import load_log
-from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.learn import LearnOptions, demonstrate, learn
 from lfdfuse.log import lfd
 from lfdfuse.log.messages import TOPICS
@@ -43,7 +43,7 @@ def files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     demo, seg = d.raw, d.segmented
     tab = learn([seg], options=LearnOptions(EstimateOptions(seed=1, trials=2))).table
     write_table(tab, table)
-    drive_table(
+    run_table(
         ExecuteOptions(world=load_world("building"), table=tab, max_time_s=90), out=run, command="execute"
     )
     return {"demo": demo, "seg": seg, "table": table, "run": run}

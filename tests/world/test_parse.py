@@ -1,4 +1,4 @@
-"""World parsing at the boundary (issue 18): every number is checked for type before any arithmetic,
+"""World parsing at the boundary: every number is checked for type before any arithmetic,
 then for finiteness; the world modules form no cycle and import nothing lazily."""
 
 from __future__ import annotations

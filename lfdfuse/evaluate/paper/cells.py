@@ -19,7 +19,7 @@ from typing import TypeVar
 
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.evaluate.paper import experiments as ex
-from lfdfuse.evaluate.paper.records import Learned, Run
+from lfdfuse.evaluate.paper.records import Learned, PaperRun
 from lfdfuse.network.table import FusionTable, load_table
 from lfdfuse.sources.tasks import Leg
 from lfdfuse.world.model import load_world
@@ -100,7 +100,7 @@ class RunCell:
     def cost(self) -> float:
         return self.seconds * DRIVE_S  # at most: a run that reaches its goal stops early
 
-    def __call__(self) -> Run:
+    def __call__(self) -> PaperRun:
         return ex.execute(
             self.logs,
             load_table(self.table),

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from lfdfuse.evaluate.paper.experiments import step_of_ticks
-from lfdfuse.evaluate.paper.records import Learned, PaperResults, Run, passing_sides, task_order
+from lfdfuse.evaluate.paper.records import Learned, PaperResults, PaperRun, passing_sides, task_order
 from lfdfuse.execute.starts import wilson_interval
 from lfdfuse.network.table import FusionTable, table_steps
 from lfdfuse.segment.read import read_segmented
@@ -38,21 +38,21 @@ class Row:
         return asdict(self)
 
 
-def _lr(run: Run) -> str:
+def _lr(run: PaperRun) -> str:
     r = run.report
     return f"left {r['left_range_mean_m']:.2f} m / right {r['right_range_mean_m']:.2f} m"
 
 
-def _count(runs: Sequence[Run], style: str) -> int:
+def _count(runs: Sequence[PaperRun], style: str) -> int:
     return sum(r.style == style and r.report["collisions"] == 0 for r in runs)
 
 
-def task_ok(run: Run) -> bool:
+def task_ok(run: PaperRun) -> bool:
     rep = run.report
     return bool(rep["completed"]) and task_order(rep) == ["red", "green", "blue"] and rep["collisions"] == 0
 
 
-def task_steps_kept(runs: Sequence[Run]) -> tuple[int, int]:
+def task_steps_kept(runs: Sequence[PaperRun]) -> tuple[int, int]:
     """(steps whose style matched the demonstrated one, steps judged) over the completed runs."""
     want = {"reach-red": "left", "reach-green": "centre", "reach-blue": "right"}
     good = total = 0
@@ -79,7 +79,7 @@ def corridor_sides(left_m: np.ndarray, right_m: np.ndarray, *, sight_m: float = 
 
 
 def style_errors(
-    learned: Mapping[str, Learned], runs: Mapping[str, Sequence[Run]]
+    learned: Mapping[str, Learned], runs: Mapping[str, Sequence[PaperRun]]
 ) -> list[tuple[str, float, float]]:
     """``(label, left error, right error)``: the runs' distance to each wall minus the demonstration's
     (m), both as :func:`corridor_sides`; the task's steps against their goal segments."""
@@ -147,7 +147,7 @@ def weight_stats(table: FusionTable) -> dict[str, Any]:
     }
 
 
-def passed(runs: Sequence[Run], want: str) -> int:
+def passed(runs: Sequence[PaperRun], want: str) -> int:
     """Runs that passed every obstacle (at least 3) on side ``want`` without a collision."""
     centres = [(o.circle[0], o.circle[1]) for o in load_world("obstacles").obstacles if o.circle]
     good = 0

@@ -13,9 +13,9 @@ import numpy as np
 
 from lfdfuse import learn
 from lfdfuse.estimate.pipeline import EstimateOptions
-from lfdfuse.evaluate.paper.records import Learned, Run
+from lfdfuse.evaluate.paper.records import Learned, PaperRun
 from lfdfuse.execute.report import corridor_style
-from lfdfuse.execute.run import ExecuteOptions, drive_table
+from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.log import lfd
 from lfdfuse.log.reader import Run as RunLog
 from lfdfuse.log.reader import iter_messages, read_run
@@ -104,10 +104,10 @@ def execute(
     name: str,
     label: str,
     seed: int = 0,
-) -> Run:
+) -> PaperRun:
     """Run ``table`` in ``world`` from ``start`` (None: the world's) for ``seconds``; ``work/name.mcap``."""
     log = work / f"{name}.mcap"
-    res = drive_table(
+    res = run_table(
         ExecuteOptions(
             world=world,
             table=table,
@@ -120,7 +120,7 @@ def execute(
         command="execute",
     )
     s = res.summary
-    return Run(
+    return PaperRun(
         label, world.name, log, res.report, s.poses, s.left_m, s.right_m, corridor_style(s.left_m, s.right_m)
     )
 

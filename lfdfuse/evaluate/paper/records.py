@@ -1,7 +1,7 @@
 """The records of the paper's experiments, and the measures read off them (pure functions).
 
 Everything here is data: what a demonstration taught (:class:`Learned`), what a run of a learned
-network did (:class:`Run`), and every experiment's results together (:class:`PaperResults`).
+network did (:class:`PaperRun`), and every experiment's results together (:class:`PaperResults`).
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ class Learned:
 
 
 @dataclass(frozen=True)
-class Run:
+class PaperRun:
     """One execution of a learned network: its report, its path ``(N, 3)`` and ±90° ranges ``(N,)``."""
 
     label: str
@@ -77,7 +77,7 @@ class PaperResults:
     quick: bool
     trials: int
     learned: Mapping[str, Learned]
-    runs: Mapping[str, tuple[Run, ...]]
+    runs: Mapping[str, tuple[PaperRun, ...]]
     junctions: Mapping[str, Mapping[str, str]]
     style_errors: tuple[tuple[str, float, float], ...]
 

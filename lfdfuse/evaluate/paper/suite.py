@@ -25,7 +25,7 @@ from lfdfuse.estimate.smc import SMCParams
 from lfdfuse.evaluate.paper import experiments as ex
 from lfdfuse.evaluate.paper.cells import LearnCell, RelearnCell, RunCell, call
 from lfdfuse.evaluate.paper.compare import style_errors
-from lfdfuse.evaluate.paper.records import STYLES, Learned, PaperResults, Run, junction_choice
+from lfdfuse.evaluate.paper.records import STYLES, Learned, PaperResults, PaperRun, junction_choice
 from lfdfuse.parallel import Batch, Executor, InProcess
 from lfdfuse.sources.tasks import Leg
 
@@ -249,7 +249,7 @@ def run_experiments(opts: PaperOptions, *, executor: Executor | None = None) -> 
         if ev.index >= 0:
             yield ExperimentEvent(ev.finished, total, ev.label)
     learned: dict[str, Learned] = {}
-    runs: dict[str, list[Run]] = {}
+    runs: dict[str, list[PaperRun]] = {}
     for cell, value in zip(plan.cells, batch.result(), strict=True):
         if isinstance(cell, LearnCell):
             learned[cell.key] = value

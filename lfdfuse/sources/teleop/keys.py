@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from lfdfuse.control.drive import DriveParams
+from lfdfuse.control.command import DriveParams
 
 #: key → (direction of linear.x, direction of angular.z), exactly ``teleop_twist_keyboard``'s
 #: bindings (its ``.`` backs up turning counter-clockwise, ``m`` clockwise); arrows alike

@@ -1,4 +1,4 @@
-"""``lfdfuse inspect`` on robot logs (issue 23, item 7): ROS bags summarised like ``ros2 bag info``
+"""``lfdfuse inspect`` on robot logs: ROS bags summarised like ``ros2 bag info``
 (topics, types, counts, time span) and what ``import`` would make of them."""
 
 from __future__ import annotations

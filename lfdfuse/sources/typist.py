@@ -1,4 +1,4 @@
-"""A scripted teacher as a person at a keyboard (``simulate --keys PERIOD``, DESIGN §9).
+"""A simulated typist: a scripted teacher pressing keys as a person at a keyboard would (``simulate --keys PERIOD``, DESIGN §9).
 
 :class:`KeyboardPerson` wraps any command source that knows where it wants to go (a style or
 task teacher) and drives the robot the way a person at ``teleop_twist_keyboard`` does: every
@@ -7,11 +7,11 @@ task teacher) and drives the robot the way a person at ``teleop_twist_keyboard``
 nearest to it (``i`` straight, ``u``/``o`` arcs, ``j``/``l`` turns in place), then holds that
 key's command until the next press. The key table and the held speeds are those of
 :mod:`lfdfuse.sources.teleop.keys`; "nearest" compares the headings the commands stand for
-under the drive mapping (:func:`~lfdfuse.control.drive.command_to_heading`), so a wanted turn of
+under the drive mapping (:func:`~lfdfuse.control.command.command_to_heading`), so a wanted turn of
 more than about 65° is a turn in place. The loop runs on the simulated clock (faster than real
 time); every press is recorded on ``/teleop/input`` as a teleop log records it.
 
->>> from lfdfuse.control.drive import DriveParams
+>>> from lfdfuse.control.command import DriveParams
 >>> nearest_key(0.0, DriveParams()), nearest_key(0.5, DriveParams()), nearest_key(-2.0, DriveParams())
 ('i', 'u', 'l')
 """
@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lfdfuse.control.drive import DriveParams, command_to_heading
+from lfdfuse.control.command import DriveParams, command_to_heading
 from lfdfuse.log.writer import LogWriter
 from lfdfuse.robot.readings import Observation
 from lfdfuse.sim.loop import GoalSource

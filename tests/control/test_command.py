@@ -4,7 +4,7 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from lfdfuse.control.drive import DriveParams, command_to_heading, heading_to_command, vector_to_command
+from lfdfuse.control.command import DriveParams, command_to_heading, heading_to_command, vector_to_command
 
 P = DriveParams()
 

@@ -11,10 +11,10 @@ import pytest
 from typer.testing import CliRunner
 
 from lfdfuse.cli.main import app
-from lfdfuse.control.drive import DriveParams
+from lfdfuse.control.command import DriveParams
 from lfdfuse.log.reader import file_info, iter_messages
-from lfdfuse.sources.keyboard import key_headings, nearest_key
 from lfdfuse.sources.teleop.keys import KeyState, press
+from lfdfuse.sources.typist import key_headings, nearest_key
 from tests.conftest import ROOT
 
 runner = CliRunner()
