@@ -58,7 +58,7 @@ def test_evaluate_many_logs_serial_and_on_two_workers_are_byte_identical(
 
 
 def test_a_segmented_log_in_a_batch_scores_as_it_does_alone(short_demos: list[Path], tmp_path: Path) -> None:
-    seg = segment_file(short_demos[0], out=tmp_path / "a.seg.mcap", measure_lag=False)
+    seg = segment_file(short_demos[0], out=tmp_path / "a.seg.mcap", lag_s=None)  # as `lfdfuse segment`
     batch = evaluate_logs([Path(seg.out), short_demos[0]], executor=InProcess()).result().to_dict()
     before, on_the_way = (
         {k: v for k, v in e.items() if k not in ("path", "prepared")} for e in batch["logs"]
