@@ -14,6 +14,7 @@ from lfdfuse.cli.evaluate_corpus import print_corpus
 from lfdfuse.cli.evaluate_many import print_logs
 from lfdfuse.cli.parallel import follow, one_executor, scheduler_option, workers_option
 from lfdfuse.evaluate.batch import evaluate_logs
+from lfdfuse.evaluate.cloning import SECTORS
 from lfdfuse.evaluate.corpus import expand_logs
 from lfdfuse.evaluate.folds import FOLDS, MIN_DECISIONS, reading_folds
 from lfdfuse.evaluate.holdout import Evaluation, MethodScore, reading
@@ -33,7 +34,7 @@ _WHAT_FOLDS = {
     "fused": "the default estimator, fitted on the other folds",
     "nnls": "non-negative least squares, other folds",
     "arbitration": "best single behaviour per BAC, other folds",
-    "bc": "behaviour cloning: k-nearest neighbours from 12 scan sectors' nearest returns, other folds",
+    "bc": f"behaviour cloning: k-nearest neighbours from {SECTORS} scan sectors' nearest returns, other folds",
     "straight": "always straight ahead",
     "previous": "the teacher's previous heading",
     "oracle": "the default estimator fitted on the fold itself",
