@@ -56,6 +56,17 @@ class MethodScore:
     median_deg: float
     turning_error_deg: float  # the same mean over steps where the teacher turned (|heading| ≥ 10°)
     command_accuracy: float | None = None  # discrete logs: share of held-out decisions predicted
+    #: k-fold (:mod:`lfdfuse.evaluate.folds`): the mean error of each fold's held-out steps
+    fold_errors_deg: tuple[float, ...] | None = None
+
+    @property
+    def fold_sd_deg(self) -> float | None:
+        """The spread of the fold means (sample standard deviation), k-fold only."""
+        f = self.fold_errors_deg
+        if f is None:
+            return None
+        finite = [x for x in f if math.isfinite(x)]
+        return float(np.std(finite, ddof=1)) if len(finite) > 1 else math.nan
 
 
 #: a held-out step counts as a turn when the demonstrated heading is at least this far off straight
@@ -74,17 +85,31 @@ class Evaluation:
     test_decisions: int | None = None  # discrete logs: held-out decisions scored
     #: distinct demonstrated headings (to 0.1°) among the held-out steps; 1: one constant command
     held_out_headings: int | None = None
+    #: ``holdout`` (the last part by time) or ``kfold`` (blocked folds over the decisions: then
+    #: ``holdout`` is None, ``train_steps`` the mean over the folds' fits)
+    split: str = "holdout"
+    folds: int | None = None
+    informative_decisions: int | None = None  # k-fold: the decisions the folds were cut over
 
     def to_dict(self) -> dict[str, Any]:
         return {
             "train_steps": self.train_steps,
             "test_steps": self.test_steps,
             "turning_steps": self.turning_steps,
-            "holdout": self.holdout,
+            "holdout": None if math.isnan(self.holdout) else self.holdout,  # k-fold holds out no part by time
             "lag_s": self.lag_s,
             "commands": self.commands,
             **({} if self.test_decisions is None else {"test_decisions": self.test_decisions}),
             "held_out_headings": self.held_out_headings,
+            **(
+                {}
+                if self.split == "holdout"
+                else {
+                    "split": self.split,
+                    "folds": self.folds,
+                    "informative_decisions": self.informative_decisions,
+                }
+            ),
             "methods": {
                 name: {
                     "heading_error_deg": round(s.heading_error_deg, 3),
@@ -99,10 +124,23 @@ class Evaluation:
                         if s.command_accuracy is None
                         else {"command_accuracy": round(s.command_accuracy, 4)}
                     ),
+                    **({} if s.fold_errors_deg is None else _folds_dict(s)),
                 }
                 for name, s in self.methods.items()
             },
         }
+
+
+def _json_float(x: float | None, digits: int = 3) -> float | None:
+    return None if x is None or not math.isfinite(x) else round(x, digits)
+
+
+def _folds_dict(s: MethodScore) -> dict[str, Any]:
+    """A k-fold method's fold means and their spread (null where a fold has no score)."""
+    return {
+        "fold_errors_deg": [_json_float(x) for x in s.fold_errors_deg or ()],
+        "fold_sd_deg": _json_float(s.fold_sd_deg),
+    }
 
 
 def slice_run(run: SegmentedRun, start: int, stop: int) -> SegmentedRun:

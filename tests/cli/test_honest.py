@@ -129,7 +129,8 @@ def test_evaluate_says_when_the_held_out_part_is_one_command(in_tmp: Path) -> No
         "--commands",
         "continuous",  # scored per tick: three presses are too few decisions for the discrete model
     )
-    res = runner.invoke(app, ["evaluate", str(seg), "--json", "e.json"])
+    # the time split: its held-out last part is the one constant command
+    res = runner.invoke(app, ["evaluate", str(seg), "--holdout", "0.3", "--json", "e.json"])
     assert res.exit_code == 0, res.output
     assert "nan" not in res.stdout.lower(), res.stdout  # no turn held out: no turn score, not nan
     assert "one constant command" in res.stdout and "no turn score" in res.stdout, res.stdout

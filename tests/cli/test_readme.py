@@ -74,7 +74,7 @@ def _cell(method: str, column: int) -> str:
     return rf"(?m)^ {method} +" + r"\S+ +" * column + r"([\d.]+)"
 
 
-TURTLEBOT = "lfdfuse evaluate turtlebot.seg.mcap"
+TURTLEBOT = "lfdfuse evaluate turtlebot.seg.mcap --holdout 0.3"
 EVAL = "lfdfuse evaluate demo.seg.mcap --holdout 0.3"
 OFFICE = "lfdfuse execute office.yaml --world office-room"
 TB_IMPORT = "lfdfuse import ../shared/realdata/ros2/macfirst_floor_take_2.mcap"
