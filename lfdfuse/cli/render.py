@@ -86,7 +86,7 @@ def print_table(table: FusionTable) -> None:
     def walk(net: Network, depth: int) -> None:
         for step in net.steps:
             goal = f"goal {step.goal}" if step.goal else "no goal"
-            if step.landmark is not None:  # a sub-goal at a decision point (issue 15)
+            if step.landmark is not None:  # a sub-goal at a decision point
                 goal = f"sub-goal: until {step.landmark.describe()}"
             console.print(f"{'  ' * depth}[bold]{step.name}[/bold] ({goal})")
             if step.network is not None:
@@ -179,7 +179,7 @@ def print_changes(table: FusionTable) -> None:
 
 
 def print_subgoals(table: FusionTable) -> None:
-    """Explain the sub-goals at decision points (issue 15): where the network turns off its route."""
+    """Explain the sub-goals at decision points: where the network turns off its route."""
     for step in table.network.steps:
         inner = step.network
         if inner is None or not any(s.landmark is not None for s in inner.steps):

@@ -1,4 +1,4 @@
-"""Pooling demos: several segmented runs as one estimate's steps and rows (issue 21).
+"""Pooling demos: several segmented runs as one estimate's steps and rows.
 
 Each demo keeps its own segmentation (and so its own lag: ``segment`` applied it); pooling only
 says which of its goal segments is which network step, and which of its steps a row pools.
@@ -12,7 +12,7 @@ says which of its goal segments is which network step, and which of its steps a 
 * **Rows** (:func:`pooled_groups`): a row is a (step, BAC); its parts are, per demo that has it,
   the demo's informative steps there. A row's likelihood is the product over its parts: for the
   continuous heading model and for least squares that is one problem of the concatenated steps
-  (:func:`problem_of`). Each demo keeps its own command model (issue 19): a keyboard demo's
+  (:func:`problem_of`). Each demo keeps its own command model: a keyboard demo's
   decisions observe the bins of its own command set, and a row pooling a scripted demo with a
   person's keyboard correction reads each by its own model, each with its own noise
   (:class:`~lfdfuse.estimate.model.MixedRowData`) — which is why the parts are carried apart.

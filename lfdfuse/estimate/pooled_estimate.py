@@ -1,4 +1,4 @@
-"""Several demos pooled into one set of rows (issue 21): the first demo's pass, then every row
+"""Several demos pooled into one set of rows: the first demo's pass, then every row
 and default fit the other demos add steps to, estimated again on the pooled steps.
 
 Which steps pool where — demos aligned by their goals, (step, BAC) groups across them, each

@@ -1,4 +1,4 @@
-"""``drive`` latency: scan arrival to command sent, live, at the robot's 10 Hz (issue 20).
+"""``drive`` latency: scan arrival to command sent, live, at the robot's 10 Hz.
 
 Two robots, each its own process, so the server's threads do not share our interpreter:
 ``lfdfuse teleop --input foxglove`` (lfdfuse's JSON) and the bridge-like simulated robot of

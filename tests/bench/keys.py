@@ -1,4 +1,4 @@
-"""Learning from a person at a keyboard (issue 19): keyboard-taught tasks and styles, closed loop.
+"""Learning from a person at a keyboard: keyboard-taught tasks and styles, closed loop.
 
 A scripted teacher becomes a person at a keyboard (``simulate --keys PERIOD``, the nearest
 ``teleop_twist_keyboard`` key every PERIOD s, held); its demo is segmented and estimated with

@@ -1,4 +1,4 @@
-"""Peak memory of ``segment`` and ``estimate`` on a long demo (issue 13: ≤ 300 MB for an hour).
+"""Peak memory of ``segment`` and ``estimate`` on a long demo (at most 300 MB for an hour's demo).
 
 Each stage runs in its own process (``/usr/bin/time``-like: ``ru_maxrss`` of the child), so the
 numbers are what a user sees: the interpreter, numpy and the stage's own arrays. The demo is a

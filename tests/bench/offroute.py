@@ -1,4 +1,4 @@
-"""Goals off the style's route (issue 15): the full table of :mod:`tests.support.offroute`.
+"""Goals off the style's route: the full table of :mod:`tests.support.offroute`.
 
 Two buildings, the teacher's start and 10 perturbed starts (3 with ``--quick``), with and
 without sub-goals, and the ring-spur task run in a larger building of the same topology. One row

@@ -1,4 +1,4 @@
-"""Many runs at once (issue 22): serial against a 2-worker Dask ``LocalCluster``, same run, same grid.
+"""Many runs at once: serial against a 2-worker Dask ``LocalCluster``, same run, same grid.
 
 First the paper's grid itself (``make paper``: every cell of the report, serial and on the
 workers, the report's numbers byte-identical), beside its cost model from the serial run's job

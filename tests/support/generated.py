@@ -1,4 +1,4 @@
-"""Sub-goals that carry (issue 21): the three-goal task in generated off-route worlds.
+"""Sub-goals that carry: the three-goal task in generated off-route worlds.
 
 In every world of :mod:`tests.support.generated_worlds` (a corridor ring, green at the end of a dead-end
 spur, side openings on the way) the scripted teacher demonstrates the paper's three-goal task

@@ -1,4 +1,4 @@
-"""Goals off the style's route (issue 15): a task learned once, run from its teacher's start and perturbed ones.
+"""Goals off the style's route: a task learned once, run from its teacher's start and perturbed ones.
 
 On buildings whose second target sits in a dead-end spur or an office off the ring, out of
 camera view from the route, a scripted teacher demonstrates the task once (:func:`demonstrate`);

@@ -17,7 +17,7 @@ from lfdfuse.world.model import load_world
 
 #: The paper's first physical scenario: left to goal 1, centre to goal 2, right to goal 3.
 THREE_GOALS = [Leg("red", "keep-left"), Leg("green", "keep-center"), Leg("blue", "keep-right")]
-#: Goals off the route (issue 15): green sits in an office off the corridor a left-keeper follows.
+#: Goals off the route: green sits in an office off the corridor a left-keeper follows.
 OFFICE = [Leg("red", "keep-left"), Leg("green", "keep-left"), Leg("blue", "keep-left")]
 
 
