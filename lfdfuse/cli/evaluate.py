@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import typer
@@ -41,6 +42,13 @@ _WHAT_FOLDS = {
 }
 
 
+def fraction(value: float | None) -> float | None:
+    """``--holdout``: a fraction strictly between 0 and 1 (a usage error otherwise)."""
+    if value is not None and not (math.isfinite(value) and 0.0 < value < 1.0):
+        raise typer.BadParameter(f"{value} is not a fraction between 0 and 1")
+    return value
+
+
 @app.command("evaluate")
 @user_errors
 def evaluate_cmd(
@@ -54,6 +62,7 @@ def evaluate_cmd(
     holdout: float | None = typer.Option(
         None,
         "--holdout",
+        callback=fraction,
         help="Hold out the last part of each log by time, this fraction (between 0 and 1),"
         " instead of k-fold.",
     ),

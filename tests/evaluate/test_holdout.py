@@ -109,8 +109,9 @@ def test_cli_writes_the_design_json(tmp_path: Path, sample_dir: Path) -> None:
         assert 0.0 <= s["heading_error_deg"] <= 180.0
     for name in METHODS:
         assert name in res.output
-    bad = CliRunner().invoke(app, ["evaluate", str(seg), "--holdout", "1.5"])
-    assert bad.exit_code == 1 and "error:" in bad.output
+    for value in ("1.5", "0", "nan"):
+        bad = CliRunner().invoke(app, ["evaluate", str(seg), "--holdout", value])
+        assert bad.exit_code == 2 and "--holdout" in bad.output and "fraction" in bad.output
 
 
 def test_the_oracle_reads_held_out_decisions_in_the_persons_command_set() -> None:
