@@ -38,7 +38,7 @@ from lfdfuse.log.writer import LogWriter
 #: the first connection must open within this (a later one is retried while --duration lasts)
 CONNECT_TIMEOUT_S = 3.0
 #: how long after connecting the link must be ready (the scan found)
-ADVERTISE_TIMEOUT_S = 3.0
+READY_TIMEOUT_S = 3.0
 BACKOFF_S = (0.2, 2.0)  # first retry delay, the longest
 STATUS_PERIOD_S = 5.0
 ZERO_PERIOD_S = 0.1  # the zero Twist's repeat while blind
@@ -107,7 +107,7 @@ class _Session:
         watchdog = asyncio.create_task(self._watchdog(link, stop))
         stopping: asyncio.Future[Any] = asyncio.create_task(stop.wait())
         try:
-            ready_by = time.monotonic() + ADVERTISE_TIMEOUT_S
+            ready_by = time.monotonic() + READY_TIMEOUT_S
             while True:
                 timeout = None if self.ready else max(0.0, ready_by - time.monotonic())
                 done, _ = await asyncio.wait(
@@ -122,7 +122,7 @@ class _Session:
                 if not self.ready:  # not ready in time
                     if self.connections == 1:
                         raise DriveError(link.not_ready())
-                    ready_by = time.monotonic() + ADVERTISE_TIMEOUT_S
+                    ready_by = time.monotonic() + READY_TIMEOUT_S
         finally:
             self._ending = True
             stopping.cancel()
