@@ -32,13 +32,13 @@ from lfdfuse.drive.decode import LiveOdom, LiveScan, LiveTargets, LiveTf, LiveTw
 from lfdfuse.drive.options import DriveError, DriveOptions, DriveSummary, Notify, Stopper
 from lfdfuse.drive.record import LiveRecorder
 from lfdfuse.drive.safety import WATCHDOG_PERIOD_S, limits_of
-from lfdfuse.drive.transport import Arrival, Event, Link, Lost, Ready, Transport
+from lfdfuse.drive.transport import Arrival, Link, Lost, Ready, Transport
 from lfdfuse.log.writer import LogWriter
 
 #: the first connection must open within this (a later one is retried while --duration lasts)
 CONNECT_TIMEOUT_S = 3.0
 #: how long after connecting the link must be ready (the scan found)
-ADVERTISE_TIMEOUT_S = 3.0
+READY_TIMEOUT_S = 3.0
 BACKOFF_S = (0.2, 2.0)  # first retry delay, the longest
 STATUS_PERIOD_S = 5.0
 ZERO_PERIOD_S = 0.1  # the zero Twist's repeat while blind
@@ -75,6 +75,8 @@ class _Session:
         self.warned: Counter[str] = Counter()
         self.command = ""  # the command's encoding and type, as the last ready link said
         self.ready = False  # the current link is ready (commands may go out)
+        self._busy = False  # an event of the link is being handled
+        self._ending = False  # the link is being closed: serve no further event
         self.odometry_m = 0.0
         self._last_odom: LiveOdom | None = None
         self._blind_noted = False
@@ -99,44 +101,57 @@ class _Session:
     # -- one link ---------------------------------------------------------------------------
     async def connection(self, link: Link, stop: asyncio.Event) -> None:
         """Serve one open link until ``stop`` or the link drops (:class:`Lost`)."""
-        self.ready = False
+        self.ready = self._busy = self._ending = False
         self._last_zero_s = -math.inf
+        serve = asyncio.create_task(self._serve(link, stop))
         watchdog = asyncio.create_task(self._watchdog(link, stop))
         stopping: asyncio.Future[Any] = asyncio.create_task(stop.wait())
-        pending: asyncio.Future[Any] | None = None
         try:
-            ready_by = time.monotonic() + ADVERTISE_TIMEOUT_S
-            while not stop.is_set():
-                if pending is None:
-                    pending = asyncio.ensure_future(anext(link))
+            ready_by = time.monotonic() + READY_TIMEOUT_S
+            while True:
                 timeout = None if self.ready else max(0.0, ready_by - time.monotonic())
                 done, _ = await asyncio.wait(
-                    {pending, stopping}, timeout=timeout, return_when=asyncio.FIRST_COMPLETED
+                    {serve, stopping}, timeout=timeout, return_when=asyncio.FIRST_COMPLETED
                 )
-                if stopping in done:
+                if serve in done:
+                    serve.result()  # raises what ended the link (Lost, a DriveError)
+                    if not stop.is_set():
+                        raise Lost("the link ended")
+                if stopping in done or serve in done:
                     break
-                if pending not in done:  # not ready in time
+                if not self.ready:  # not ready in time
                     if self.connections == 1:
                         raise DriveError(link.not_ready())
-                    ready_by = time.monotonic() + ADVERTISE_TIMEOUT_S
-                    continue
-                ev: Event = pending.result()
-                pending = None
-                if isinstance(ev, Ready):
-                    await self._ready(link, ev)
-                else:
-                    await self._arrival(link, ev)
+                    ready_by = time.monotonic() + READY_TIMEOUT_S
         finally:
-            for task in (pending, stopping, watchdog):
-                if task is not None:
-                    task.cancel()
-                    with suppress(asyncio.CancelledError, Exception):
-                        await task
+            self._ending = True
+            stopping.cancel()
+            watchdog.cancel()
+            if not self._busy:  # waiting for the link: nothing is half done
+                serve.cancel()
+            # (else the event being handled is finished first, a command sent is recorded)
+            for task in (serve, stopping, watchdog):
+                with suppress(asyncio.CancelledError, Exception):
+                    await task
             if self.ready:
                 with suppress(Lost):  # every exit with an open link stops the robot first
                     await self._send_zero(link, source="stop")
             self.ready = False
             await link.close()
+
+    async def _serve(self, link: Link, stop: asyncio.Event) -> None:
+        """Hand each event of the link on as it comes, in this one task (no hop per message)."""
+        async for ev in link:
+            self._busy = True
+            try:
+                if isinstance(ev, Ready):
+                    await self._ready(link, ev)
+                else:
+                    await self._arrival(link, ev)
+            finally:
+                self._busy = False
+            if stop.is_set() or self._ending:
+                return
 
     async def _ready(self, link: Link, ev: Ready) -> None:
         self.ready = True

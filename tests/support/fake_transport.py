@@ -5,8 +5,9 @@
 ``drive``'s run the robot's sensing as decoded records — the scan in ``base_link``, odometry,
 and with ``camera`` the target detections — and take its commands. ``lockstep`` steps the
 simulator as soon as a command answers a scan (faster than real time, the same closed loop);
-otherwise it runs at the robot's 10 Hz on the event loop's clock. Stamps are the simulator's
-time plus ``epoch_ns`` (a real robot's clock is an epoch time). Faults: scans pause for a
+otherwise it runs at the robot's 10 Hz on the event loop's clock. Stamps are the robot's wall
+clock, as on a real robot: ``epoch_ns`` plus the time since its first message (the simulator's
+own time only moves the physics, so a lockstep run's stamps do not race ahead). Faults: scans pause for a
 while (:meth:`pause_scans`), the robot refuses connections (``reachable``).
 """
 
@@ -76,6 +77,8 @@ class FakeRobot:
         self._obs: Observation | None = None
         self._pauses: list[tuple[float, float]] = []  # (from, until) robot seconds without scans
         self.scanned = False  # the last period had a scan
+        self.stamps: list[int] = []  # of each period's messages
+        self._t0 = 0.0
         self.collisions = 0
 
     def transport(self) -> FakeTransport:
@@ -97,7 +100,12 @@ class FakeRobot:
         if self._obs is None:
             self._obs = self.sim.reset(self.start)
         obs = self._obs
-        t, p, r = self.epoch_ns + obs.t_ns, obs.pose, obs.reading
+        if not self.stamps:
+            self._t0 = time.monotonic()
+        t = self.epoch_ns + round((time.monotonic() - self._t0) * 1e9)
+        t = max(t, self.stamps[-1] + 1) if self.stamps else t
+        self.stamps.append(t)
+        p, r = obs.pose, obs.reading
         self.poses.append(p.as_tuple())
         self.sides.append((float(r.ranges_m[self._beams[0]]), float(r.ranges_m[self._beams[1]])))
         now, cpu = time.perf_counter(), time.thread_time()
