@@ -302,7 +302,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("execute",),
     ("drive", "learn"),
     ("evaluate",),
-    ("viz", "tools"),
+    ("viz",),
     ("cli",),
     ("__main__",),
 )

@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from lfdfuse.behaviors.primitives import distinct_beams
-from lfdfuse.sim.sensors import ScanGeometry
+from lfdfuse.robot.readings import ScanGeometry
 
 #: sectors round the robot (30° each) and the range they are clipped at (m)
 SECTORS = 12

@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lfdfuse.evaluate.cloning import CLIP_M, SECTORS, clone_headings, sector_features
-from lfdfuse.sim.sensors import ScanGeometry
+from lfdfuse.robot.readings import ScanGeometry
 from tests.test_architecture import LIB
 
 FULL = ScanGeometry(-math.pi, 2 * math.pi / 360, 360, 5.0)
