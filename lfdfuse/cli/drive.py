@@ -12,6 +12,7 @@ from lfdfuse.cli.common import check_outputs, console, err_console, user_errors
 from lfdfuse.drive.options import DriveOptions, DriveSummary
 from lfdfuse.drive.session import drive
 from lfdfuse.network.table import load_table
+from lfdfuse.words import counted
 
 
 @app.command("drive")
@@ -108,7 +109,10 @@ def print_summary(s: DriveSummary, *, shadow: bool) -> None:
             console.print("  agreement   none: no informative command of the robot's own came", markup=False)
     else:
         console.print(
-            f"  sent        {s.sent} commands ({s.encoding}), {s.zeros} of them zero Twists", markup=False
+            f"  sent        {counted(s.sent, 'command')}"
+            + (f" ({s.encoding})" if s.encoding else "")
+            + f", {s.zeros} of them zero Twists",
+            markup=False,
         )
     console.print(f"  odometry    {s.odometry_m:.1f} m", markup=False)
     console.print(

@@ -15,6 +15,7 @@ from lfdfuse.errors import ConfigError
 from lfdfuse.execute.starts import MAX_STARTS, StartsOptions, StartsResult, run_starts
 from lfdfuse.files import write_text_atomic
 from lfdfuse.parallel import open_executor
+from lfdfuse.words import counted
 
 
 def starts_of(text: str) -> int | Path:
@@ -71,5 +72,5 @@ def print_starts(res: StartsResult, *, table: str) -> None:
     ok = [r for r in res.runs if "error" not in r]
     hits = sum(r["collisions"] > 0 for r in ok)
     console.print(
-        f"{head}; {hits} of {len(ok)} runs collided ({sum(r['collisions'] for r in ok)} collisions)"
+        f"{head}; {hits} of {len(ok)} runs collided ({counted(sum(r['collisions'] for r in ok), 'collision')})"
     )

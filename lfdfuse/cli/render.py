@@ -13,6 +13,7 @@ from lfdfuse.execute.report import help_line, verdict
 from lfdfuse.network.table import FusionRow, FusionTable, Network
 from lfdfuse.segment.goals import Segmentation, bac_summary
 from lfdfuse.sim.loop import RunSummary
+from lfdfuse.words import counted
 
 
 def print_run(summary: RunSummary, *, title: str) -> None:
@@ -173,7 +174,7 @@ def print_changes(table: FusionTable) -> None:
         )
         what = "new row" if r.weights_before is None else "weights %"
         console.print(
-            f"  {name} BAC {r.bac} ({bac_names(r.bac, table.behaviors)}): +{r.samples_added} samples "
+            f"  {name} BAC {r.bac} ({bac_names(r.bac, table.behaviors)}): +{counted(r.samples_added, 'sample')} "
             f"({r.samples} in all), {what}: {moves}"
         )
 
@@ -206,7 +207,7 @@ def print_report(rep: dict[str, Any], *, out: str) -> None:
     else:
         status = "task completed" if rep["completed"] else "task not completed"
     console.print(
-        f"[bold]execute[/bold] → {out}: {status} in {rep['duration_s']:.1f} s, {rep['path_length_m']:.1f} m, {rep['collisions']} collisions"
+        f"[bold]execute[/bold] → {out}: {status} in {rep['duration_s']:.1f} s, {rep['path_length_m']:.1f} m, {counted(rep['collisions'], 'collision')}"
     )
     for g in rep["goals"]:
         when = f"at {g['time_s']:.1f} s" if g["reached"] else "not reached"

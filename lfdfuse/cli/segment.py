@@ -53,6 +53,8 @@ def segment_cmd(
       lfdfuse segment keyboard.mcap --commands discrete
     """
     lag_s = parse_lag(lag)
+    if out is None and src.name.endswith(".seg.mcap"):
+        raise ConfigError(f"{src} is segmented already: give -o to segment it again under another name")
     target = out or default_out(src, ".seg")
     check_outputs([target], [src])
     with progress_bar("segment"):

@@ -58,6 +58,7 @@ from lfdfuse.sources.teleop.session import (
     teleop,
 )
 from lfdfuse.sources.teleop.view import ARROWS, LASER, TRAIL, WALL, render_map
+from lfdfuse.words import counted
 from lfdfuse.world.model import DEFAULT_WORLD, World, load_world
 
 
@@ -234,7 +235,7 @@ def teleop_cmd(
     if result is not None:
         c = result.report["correction"]
         console.print(
-            f"  corrected  the person drove {c['person_ticks']} ticks ({c['takeovers']} takeovers),"
+            f"  corrected  the person drove {c['person_ticks']} ticks ({counted(c['takeovers'], 'takeover')}),"
             f" the network {c['network_ticks']}"
         )
         print_report(result.report, out=str(out))

@@ -13,6 +13,7 @@ from lfdfuse.files import write_text_atomic
 from lfdfuse.network.stepper import HelpRequest, NetworkStepper
 from lfdfuse.network.table import FusionTable, leaf_steps
 from lfdfuse.sim.loop import RunSummary
+from lfdfuse.words import counted
 
 
 def build_report(
@@ -148,7 +149,7 @@ def verdict(report: dict[str, Any]) -> str:
         )
     styles = _styles(report["steps"])
     parts.append("; ".join(styles) if styles else "no step ran")
-    parts.append(f"{report['collisions']} collisions")
+    parts.append(counted(report["collisions"], "collision"))
     return ", ".join(parts)
 
 

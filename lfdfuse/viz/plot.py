@@ -21,6 +21,7 @@ from lfdfuse.evaluate.plot_data import PathData, load_log
 from lfdfuse.files import write_bytes_atomic
 from lfdfuse.network.table import FusionTable, load_table, table_steps
 from lfdfuse.viz import figures
+from lfdfuse.words import counted
 
 FORMATS = ("png", "svg")
 DPI = 100
@@ -155,7 +156,7 @@ def plot_file(
     parts = "" if data.kind == "demo" else f", {len(data.part_names)} {data.part_label}s"
     summary = (
         f"{data.kind}: {len(data.t_s)} scans{parts}, {len(data.bac_changes())} BAC changes, "
-        f"{len(data.goals)} goals reached, {len(data.collisions)} collisions"
+        f"{counted(len(data.goals), 'goal reached', 'goals reached')}, {counted(len(data.collisions), 'collision')}"
     )
     return PlotResult(str(out), data.kind, w, h, summary)
 

@@ -98,3 +98,10 @@ def test_a_folder_that_is_not_a_bag_is_named_as_a_folder(tmp_path: Path, cmd: li
     (tmp_path / "sub").mkdir()
     code, out = _in(tmp_path, cmd)
     assert code == 1 and "is a folder" in out and "import" not in out, out
+
+
+def test_a_segmented_demo_is_not_segmented_into_a_seg_seg_file(tmp_path: Path) -> None:
+    (tmp_path / "d.seg.mcap").write_bytes(b"")
+    code, out = _in(tmp_path, ["segment", "d.seg.mcap"])
+    assert code == 1 and "segmented already" in out and "-o" in out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.seg.mcap"]
