@@ -82,8 +82,14 @@ def report_cmd(
         f"[bold]report[/bold] → {out / 'index.html'}  ({len(result.figures)} figures, "
         f"{time.monotonic() - began:.0f} s)"
     )
-    console.print(
-        f"  {agree} results agree with the paper, {differ} differ, "
-        f"{len(result.comparison) - agree - differ} not comparable"
-    )
+    if quick:
+        console.print(
+            f"  {len(result.comparison)} results measured; a --quick smoke run judges none against the paper"
+            " (too few runs per controller): run without --quick for the verdicts"
+        )
+    else:
+        console.print(
+            f"  {agree} results agree with the paper, {differ} differ, "
+            f"{len(result.comparison) - agree - differ} not comparable"
+        )
     console.print(markdown_table(result.comparison), markup=False, soft_wrap=True)

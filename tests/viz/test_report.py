@@ -5,7 +5,9 @@ from their results, as ``lfdfuse report`` composes it."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -104,3 +106,19 @@ def test_the_report_json_shows_the_spread_of_every_rate(report: Report) -> None:
         assert s["runs"] == len(data["runs"][name]) and 0 <= s["successes"] <= s["runs"], name
         lo, hi = s["ci95"]
         assert 0.0 <= lo <= s["rate"] <= hi <= 1.0, name
+
+
+def test_a_quick_report_judges_nothing_and_a_full_one_follows_its_numbers(report: Report) -> None:
+    """A smoke run (one run per controller) agrees with nothing and differs from nothing; judged
+    in full, a style row's verdict follows from the offset it prints beside it."""
+    results = report[1][-1].results
+    assert results is not None
+    assert all(r.agrees is None for r in rows(results))
+    judged = {r.experiment: r for r in rows(dataclasses.replace(results, quick=False))}
+    assert any(r.agrees is not None for r in judged.values())
+    for style, want in (("keep-left", "left"), ("keep-center", "centre"), ("keep-right", "right")):
+        row = judged[f"{style} learned and run in the small world"]
+        m = re.search(r"keeps (\w+) \(median ([0-9.]+) m (left|right) of centre", row.ours)
+        assert m is not None, row.ours
+        shown = "centre" if float(m.group(2)) <= 0.25 else m.group(3)
+        assert m.group(1) == shown and row.agrees == (shown == want), row

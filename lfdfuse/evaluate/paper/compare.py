@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -39,8 +39,14 @@ class Row:
 
 
 def _lr(run: PaperRun) -> str:
-    r = run.report
-    return f"left {r['left_range_mean_m']:.2f} m / right {r['right_range_mean_m']:.2f} m"
+    """The number a run's style is judged by (:func:`~lfdfuse.execute.report.corridor_style`): its
+    median offset from the corridor's centre where both walls are within 2 m."""
+    both = (run.left_m < 2.0) & (run.right_m < 2.0)
+    if not both.any():
+        return "never both walls within 2 m"
+    offset = float(np.median(run.right_m[both] - run.left_m[both])) / 2
+    side = "left" if offset > 0 else "right"
+    return f"median {abs(offset):.2f} m {side} of centre where both walls are within 2 m; ≤ 0.25 m is centre"
 
 
 def _count(runs: Sequence[PaperRun], style: str) -> int:
@@ -183,8 +189,19 @@ def spread(results: PaperResults) -> dict[str, dict[str, Any]]:
     return out
 
 
+#: why a --quick report judges nothing
+QUICK_NOTE = "A --quick smoke run: too few runs per controller to agree or differ with the paper."
+
+
 def rows(results: PaperResults) -> Iterator[Row]:
-    """The comparison rows, in the paper's order."""
+    """The comparison rows, in the paper's order; a quick (smoke) run measures, but judges nothing."""
+    for row in _rows(results):
+        if results.quick and row.agrees is not None:
+            row = replace(row, agrees=None, note=f"{row.note} {QUICK_NOTE}".strip())
+        yield row
+
+
+def _rows(results: PaperResults) -> Iterator[Row]:
     learned, runs, junctions = results.learned, results.runs, results.junctions
     errors, quick = results.style_errors, results.quick
     yield Row(
