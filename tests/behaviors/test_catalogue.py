@@ -12,6 +12,7 @@ import re
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -28,8 +29,12 @@ from lfdfuse.behaviors.primitives import (
 )
 from lfdfuse.behaviors.spec import BehaviorSpec
 from lfdfuse.drive.core import Inputs, missing_input
-from lfdfuse.network.table import default_weights_for
-from lfdfuse.robot.readings import ScanGeometry
+from lfdfuse.execute.record import LfdRecorder
+from lfdfuse.network.stepper import NetworkStepper
+from lfdfuse.network.table import default_weights_for, parse_table
+from lfdfuse.robot.pose import Pose
+from lfdfuse.robot.readings import Observation, Reading, ScanGeometry
+from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.viz import colors
 from lfdfuse.world.model import load_world
 from tests.conftest import ROOT
@@ -147,16 +152,54 @@ def test_the_run_layout_plots_every_weight_in_its_colour() -> None:
         assert series[name]["color"].lower() == catalogue.color(name).lower(), name
 
 
-def test_overlay_colours_are_the_catalogue_colours() -> None:
-    """The ``/lfd/overlay`` arrows: one colour per behaviour, whatever its index in the table."""
-    for name in [*BASE_BEHAVIORS, "attract_green"]:
-        r, g, b = catalogue.rgb(name)
-        assert "#" + "".join(f"{round(c * 255):02x}" for c in (r, g, b)) == catalogue.color(name).lower()
-    import inspect
+class _Log:
+    """A log writer that keeps what the recorder writes to ``/lfd/overlay``."""
 
-    from lfdfuse.execute import record
+    def __init__(self) -> None:
+        self.scenes: list[dict[str, Any]] = []
 
-    assert "catalogue.rgb(n)" in inspect.getsource(record.LfdRecorder.record)
+    def add_topic(self, *_: object) -> None:
+        pass
+
+    def write_raw(self, *_: object) -> None:
+        pass
+
+    def write(self, topic: str, _t: int, scene: dict[str, Any]) -> None:
+        if topic == "/lfd/overlay":
+            self.scenes.append(scene)
+
+
+def test_overlay_arrows_take_the_catalogue_colours() -> None:
+    """``/lfd/overlay``: each behaviour's arrow in its catalogue colour, whatever its column."""
+    names = ["wall_attract_left", "avoid", "wander"]  # not the catalogue's order
+    table = parse_table(
+        {
+            "format": "lfdfuse/fusion-table@1",
+            "behaviors": names,
+            "default_weights": {n: 1.0 for n in names},
+            "network": {"name": "n", "steps": [{"name": "free", "goal": None, "fusion": []}]},
+        }
+    )
+    geom = ScanGeometry(-np.pi / 2, np.pi / 180, 181, 8.0)
+    stepper = NetworkStepper(
+        table=table,
+        world=None,
+        sensors=SensorParams(),
+        rng=np.random.default_rng(0),
+        geometry=geom,
+        safety=None,
+    )
+    log = _Log()
+    recorder = LfdRecorder(log, stepper)  # type: ignore[arg-type]
+    ranges = np.full(181, 5.0)
+    ranges[150:181] = 1.0  # a wall near on the left: all three behaviours apply
+    obs = Observation(0, 0, Pose(0.0, 0.0, 0.0), Reading(ranges, np.zeros(0), ()))
+    recorder.record(obs, stepper.command(obs))
+    arrows = log.scenes[0]["entities"][0]["arrows"]
+    got = [(a["color"]["r"], a["color"]["g"], a["color"]["b"]) for a in arrows]
+    want = [catalogue.rgb(n) for n in names] + [(1.0, 1.0, 1.0)]  # the fused vector in white
+    assert np.allclose(got, want), (got, want)
+    assert len(set(want)) == len(want)
 
 
 def test_presets_name_catalogue_behaviours() -> None:
