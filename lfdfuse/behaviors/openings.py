@@ -1,4 +1,4 @@
-"""Landmarks a robot recognises from its own sensors: side openings and odometry (issue 15).
+"""Landmarks a robot recognises from its own sensors: side openings and odometry.
 
 A purely reactive network cannot know *where* a person turned off the route. What it can
 sense, without a map: an *opening* on its left or right (a junction, a door: most beams of a

@@ -174,7 +174,7 @@ def print_changes(table: FusionTable) -> None:
         )
         what = "new row" if r.weights_before is None else "weights %"
         console.print(
-            f"  {name} BAC {r.bac} ({bac_names(r.bac, table.behaviors)}): +{counted(r.samples_added, 'sample')} "
+            f"  {name} BAC {r.bac} ({bac_names(r.bac, table.behaviors)}): +{counted(r.samples_added or 0, 'sample')} "
             f"({r.samples} in all), {what}: {moves}"
         )
 

@@ -1,4 +1,4 @@
-"""Sub-goals at decision points: landmark postconditions of a fusion step (issues 15, 21).
+"""Sub-goals at decision points: landmark postconditions of a fusion step.
 
 A person turns into a side corridor because they know the goal is there, long before the
 camera sees it. The learned network reproduces that turn with two extra fusion steps inside
@@ -17,13 +17,12 @@ its own sensors — never map coordinates:
       side opening a teacher turned into. A side opening whose onset reads the way ahead
       closed (the robot veered toward it and sees its far wall) is the one if the way ahead
       reads open while the opening is still beside the robot;
-    - the ``nth`` (or a later one) by ``count``: ``all`` onsets on that side (issue 15, and
-      what a table without ``count`` means), or only the openings ``passed`` by, not turned
+    - the ``nth`` (or a later one) by ``count``: ``all`` onsets on that side (what a table without ``count`` means), or only the openings ``passed`` by, not turned
       into (:class:`lfdfuse.behaviors.openings.PassedCounter`). Corners met while turning
       come and go with the line each driver takes; counted, they made the robot take the
-      opening before or after the teacher's from another start (issue 21);
+      opening before or after the teacher's from another start;
     - or, with ``within_m``, the first one once ``odometry_m − within_m`` has been driven,
-      whatever came before (an alternative measured in issue 21, not written by ``estimate``);
+      whatever came before (an alternative measured on the generated worlds, not written by ``estimate``);
 
     while a step ended by an ``ahead: open`` opening runs, the runtime keeps the fused heading
     within :data:`~lfdfuse.network.runtime.DRIVE_ON_RAD` of the held heading as long as the way
@@ -140,7 +139,7 @@ class Ahead(StrEnum):
 class OpeningCount(StrEnum):
     """Which openings an opening landmark's ``nth`` counts since its step began."""
 
-    #: every onset on the side (issue 15; a table without ``count`` means this)
+    #: every onset on the side (a table without ``count`` means this)
     ALL = "all"
     #: openings passed by, not turned into (:class:`lfdfuse.behaviors.openings.PassedCounter`)
     PASSED = "passed"

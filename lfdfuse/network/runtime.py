@@ -27,14 +27,14 @@ Path = tuple[int, ...]
 #: a drive-on step to a side opening (the way ahead goes on there) keeps the fused heading within
 #: this of the heading the opening sectors are held at, while the way ahead is open: the robot
 #: drives past the openings before the n-th as the teacher did, instead of being drawn into one
-#: by the style's pull toward open space (issue 21: measured on the generated worlds)
+#: by the style's pull toward open space (measured on the generated worlds)
 DRIVE_ON_RAD = math.radians(30.0)
 
 #: the step after a turn keeps the fused heading within this of the heading the turn ended on for
 #: :data:`SETTLE_M` of travel, where the way ahead was open as the turn ended: a robot that turned
 #: tighter than the teacher ends its turn at the mouth of the new corridor, not in it, and the
 #: next step's rows (learned where the teacher drove along that corridor) can pull it back toward
-#: the open way behind (issue 21: the turn out of a spur at a T, measured on the generated worlds)
+#: the open way behind (the turn out of a spur at a T, measured on the generated worlds)
 SETTLE_RAD = math.radians(15.0)
 SETTLE_M = 2.0
 

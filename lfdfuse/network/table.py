@@ -39,7 +39,7 @@ class FusionRow:
     low_samples: bool = False
     trial_std: dict[str, float] | None = None
     identifiable: bool | None = None
-    #: pooled demos (issue 21): the samples the demos after the first added to this row, and the
+    #: pooled demos: the samples the demos after the first added to this row, and the
     #: weights the first demo alone gave it (None: no demo changed the row, or it is new)
     samples_added: int | None = None
     weights_before: dict[str, float] | None = None
@@ -55,7 +55,7 @@ class Step:
     network: Network | None = None
     #: this step's weights for BACs it never saw (an extension; else the table's default_weights)
     default_weights: dict[str, float] | None = None
-    #: a sub-goal recognised from the robot's own sensors (an extension, issue 15): the step is
+    #: a sub-goal recognised from the robot's own sensors (an extension of the paper): the step is
     #: achieved when it is met; such a step has no target goal
     landmark: Landmark | None = None
 

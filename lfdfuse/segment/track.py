@@ -67,9 +67,9 @@ def landmark_track(
 
 class OpeningCue(StrEnum):
     """How a decision's drive-on step recognises its opening: the alternatives measured on the
-    generated off-route worlds (issue 21)."""
+    generated off-route worlds."""
 
-    #: the n-th onset on the side since the step began (issue 15)
+    #: the n-th onset on the side since the step began
     ALL = "all"
     #: the n-th opening on the side passed by, not turned into (:class:`PassedCounter`)
     PASSED = "passed"
