@@ -407,3 +407,16 @@ def test_stages_reach_robot_types_without_another_stages_internals() -> None:
                     f"{m} imports {d}" for d in deps if any(d == b or d.startswith(b + ".") for b in banned)
                 ]
     assert not bad, "\n  ".join(bad)
+
+
+#: a module past this many lines has taken on a second or third job: split it
+MAX_MODULE_LINES = 500
+
+
+def test_no_module_over_its_budget() -> None:
+    long = sorted(
+        f"{p.relative_to(LIB.parent)}: {n} lines"
+        for p in LIB.rglob("*.py")
+        if (n := len(p.read_text().splitlines())) > MAX_MODULE_LINES
+    )
+    assert not long, f"modules over {MAX_MODULE_LINES} lines (split them): {long}"
