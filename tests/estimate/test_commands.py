@@ -203,7 +203,7 @@ def test_commands_and_lag_on_the_command_line(tmp_path: Path) -> None:
     demo = ROOT / "sample_logs" / "keep-left-building.mcap"
     seg = tmp_path / "d.seg.mcap"
     bad = runner.invoke(app, ["segment", str(demo), "--lag", "soon", "-o", str(seg)])
-    assert bad.exit_code == 1 and bad.output.startswith("error: --lag") and not seg.exists()
+    assert bad.exit_code == 2 and "--lag" in bad.output and not seg.exists()  # not a number: usage
     bad = runner.invoke(app, ["segment", str(demo), "--commands", "morse", "-o", str(seg)])
     assert bad.exit_code == 2 and "morse" in bad.output and not seg.exists()  # a bad choice: usage
     res = runner.invoke(app, ["segment", str(demo), "--commands", "discrete", "-o", str(seg)])

@@ -149,7 +149,7 @@ def test_segment_bad_input(tmp_path: Path, sample_dir: Path) -> None:
         assert "no /scan and no /cmd_vel" in _cli_error(["segment", "empty.mcap"], tmp_path)
         data = (sample_dir / "keep-left-building.mcap").read_bytes()
         (tmp_path / "cut.mcap").write_bytes(data[: len(data) // 2])
-        assert "not a readable MCAP" in _cli_error(["segment", "cut.mcap"], tmp_path)
+        assert "truncated MCAP file" in _cli_error(["segment", "cut.mcap"], tmp_path)
         assert "unknown behaviour 'fly'" in _cli_error(
             ["segment", str(sample_dir / "keep-left-building.mcap"), "-b", "avoid,fly", "-o", "x.mcap"],
             tmp_path,
