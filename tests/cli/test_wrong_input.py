@@ -10,6 +10,7 @@ from typer.testing import CliRunner
 
 from lfdfuse.cli.main import app
 from lfdfuse.log.reader import MCAP_MAGIC
+from tests.hostile.base import TABLE_YAML
 
 runner = CliRunner()
 
@@ -105,3 +106,21 @@ def test_a_segmented_demo_is_not_segmented_into_a_seg_seg_file(tmp_path: Path) -
     code, out = _in(tmp_path, ["segment", "d.seg.mcap"])
     assert code == 1 and "segmented already" in out and "-o" in out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d.seg.mcap"]
+
+
+def test_a_goal_target_that_is_null_is_refused(tmp_path: Path) -> None:
+    table = TABLE_YAML.replace("goal: null", "goal: {target: null}", 1)
+    assert table != TABLE_YAML
+    (tmp_path / "t.yaml").write_text(table)
+    code, out = _in(tmp_path, ["execute", "t.yaml", "--world", "tee", "--max-time", "1"])
+    assert code == 1 and "goal.target must be a target's name" in out, out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.yaml"]
+
+
+def test_a_goal_the_world_lacks_is_said_at_the_start(tmp_path: Path) -> None:
+    table = TABLE_YAML.replace("goal: null", "goal: {target: red}", 1)
+    (tmp_path / "t.yaml").write_text(table)
+    code, out = _in(tmp_path, ["execute", "t.yaml", "--world", "corridor", "--max-time", "1"])
+    assert code == 0, out
+    first = out.strip().splitlines()[0]
+    assert first.startswith("warning: world 'corridor' has no target red"), out
