@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import pytest
@@ -124,3 +125,15 @@ def test_a_goal_the_world_lacks_is_said_at_the_start(tmp_path: Path) -> None:
     assert code == 0, out
     first = out.strip().splitlines()[0]
     assert first.startswith("warning: world 'corridor' has no target red"), out
+
+
+def test_segment_durations_add_up_to_the_demo(tmp_path: Path) -> None:
+    """Goal segments' seconds come from the stamps: they add up to the demo's span, not steps × 0.1 s."""
+    task = Path(__file__).resolve().parents[2] / "sample_logs" / "three-goals.task.yaml"
+    code, out = _in(tmp_path, ["simulate", "--teacher", str(task), "--duration", "60", "-o", "d.mcap"])
+    assert code == 0, out
+    code, out = _in(tmp_path, ["segment", "d.mcap"])
+    assert code == 0, out
+    secs = [float(m) for m in re.findall(r"segment \d+ → [^:]+: ([0-9.]+) s", out)]
+    assert len(secs) >= 2, out  # red is reached within the minute
+    assert abs(sum(secs) - 60.0) <= 0.05 * len(secs), (secs, out)
