@@ -11,6 +11,7 @@ from lfdfuse.cli.common import (
     check_outputs,
     checked,
     duration_option,
+    err_console,
     existing,
     progress_bar,
     seed_option,
@@ -92,6 +93,14 @@ def execute_cmd(
         raise typer.BadParameter("--workers and --scheduler run many starts: give --starts too")
     w = load_world(world)
     tab = load_table(table)
+    unreachable = [g for g in dict.fromkeys(tab.goals()) if g not in w.target_names]
+    if unreachable:
+        err_console.print(
+            f"warning: world {w.name!r} has no target {', '.join(unreachable)}: the goal"
+            f"{'s' if len(unreachable) > 1 else ''} cannot be reached and the run goes on to --max-time",
+            markup=False,
+            soft_wrap=True,
+        )
     pose = Pose.parse(start) if start is not None else None
     opts = ExecuteOptions(
         world=w,

@@ -17,7 +17,6 @@ from lfdfuse.files import YamlKind, kind_of, read_yaml
 from lfdfuse.log.messages import PROVENANCE
 from lfdfuse.log.reader import file_info
 from lfdfuse.network.table import parse_table
-from lfdfuse.segment.pipeline import step_s_of
 from lfdfuse.segment.read import read_segmented, segmentation_of
 from lfdfuse.sources.importers import robot_format
 from lfdfuse.sources.importers.info import ROLE_TOPICS, LogSummary, summarise
@@ -97,7 +96,7 @@ def inspect(
         net = seg.metadata.get("segment_network_ticks")
         if net is not None:  # a correction log: only the person's ticks teach
             console.print(f"  correction log: {net} tick(s) the network drove are not informative")
-        print_segments(segmentation_of(seg), seg.names, step_s_of(seg.t_ns))
+        print_segments(segmentation_of(seg), seg.names, seg.t_ns)
 
 
 def _stamp(t_ns: int) -> str:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 from rich.table import Table
 
 from lfdfuse.behaviors.names import abbreviation, legend_entry
@@ -28,13 +29,18 @@ def print_run(summary: RunSummary, *, title: str) -> None:
     )
 
 
-def print_segments(segm: Segmentation, names: tuple[str, ...], dt: float) -> None:
+def print_segments(segm: Segmentation, names: tuple[str, ...], t_ns: np.ndarray) -> None:
+    """Each goal segment: its goal, how long it lasted (from its first step to the next segment's,
+    or to the demo's last step: the durations add up to the demo's), its steps and BACs."""
     for seg in segm.segments:
         bacs = bac_summary(segm, seg)
         goal = seg.goal or "no goal reached"
         steps = seg.stop - seg.start
+        last = min(seg.stop, len(t_ns) - 1)
+        secs = (int(t_ns[last]) - int(t_ns[seg.start])) / 1e9
         console.print(
-            f"  [bold]segment {seg.index}[/bold] → {goal}: {steps * dt:.1f} s, {steps} steps, {len(bacs)} BACs"
+            f"  [bold]segment {seg.index}[/bold] → {goal}: {secs:.1f} s, {counted(steps, 'step')},"
+            f" {counted(len(bacs), 'BAC')}"
         )
         cells = [f"{b}={bac_names(b, names)} ({n})" for b, n, _ in bacs]
         console.print("    BAC (samples): " + ", ".join(cells))

@@ -235,9 +235,11 @@ def teleop_cmd(
     if result is not None:
         c = result.report["correction"]
         console.print(
-            f"  corrected  the person drove {c['person_ticks']} ticks ({counted(c['takeovers'], 'takeover')}),"
-            f" the network {c['network_ticks']}"
+            f"  corrected  the person drove {counted(c['person_ticks'], 'tick')}"
+            f" ({counted(c['takeovers'], 'takeover')}, {counted(c['person_collisions'], 'collision')}),"
+            f" the network {counted(c['network_ticks'], 'tick')}"
         )
+        console.print("  while the network drove:")
         print_report(result.report, out=str(out))
         if report is not None:
             write_report(result.report, report)

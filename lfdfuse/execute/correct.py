@@ -40,8 +40,9 @@ def correction_driver(opts: TeleopOptions, table: FusionTable) -> NetworkStepper
 
 @dataclass(frozen=True)
 class CorrectionResult:
-    """A correction run: the teleop summary and execute's report of the network's task, with a
-    ``correction`` entry (ticks the person drove, takeovers)."""
+    """A correction run: the teleop summary and execute's report of the network's task (its
+    collisions are those that began while the network drove), with a ``correction`` entry (ticks
+    the person drove, takeovers, collisions while the person drove)."""
 
     teleop: TeleopSummary
     report: dict[str, Any]
@@ -78,11 +79,13 @@ def correct(
         summary.run,
         completed=driver.done,
         reached=tuple((name, k * dt) for name, k in driver.reached),
+        collisions=session.network_collisions,
     )
     report = network_report(task, driver)
     report["correction"] = {
         "person_ticks": session.person_ticks,
         "network_ticks": session.network_ticks,
         "takeovers": session.takeovers,
+        "person_collisions": session.person_collisions,
     }
     return CorrectionResult(summary, report)

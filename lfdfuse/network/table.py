@@ -211,7 +211,9 @@ def _network(d: Any, behaviors: tuple[str, ...], where: str) -> Network:
         goal = s.get("goal")
         if goal is not None:
             goal = _keys(goal, {"target"}, f"{sw}.goal")
-            goal = str(_req(goal, "target", f"{sw}.goal"))
+            goal = _req(goal, "target", f"{sw}.goal")
+            if not isinstance(goal, str) or not goal.strip():
+                raise ConfigError(f"fusion table: {sw}.goal.target must be a target's name, got {goal!r}")
         has_f, has_n = "fusion" in s, "network" in s
         if has_f == has_n:
             raise ConfigError(f"fusion table: {sw}: give exactly one of 'fusion' or 'network'")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import pytest
@@ -10,6 +11,7 @@ from typer.testing import CliRunner
 
 from lfdfuse.cli.main import app
 from lfdfuse.log.reader import MCAP_MAGIC
+from tests.hostile.base import TABLE_YAML
 
 runner = CliRunner()
 
@@ -105,3 +107,33 @@ def test_a_segmented_demo_is_not_segmented_into_a_seg_seg_file(tmp_path: Path) -
     code, out = _in(tmp_path, ["segment", "d.seg.mcap"])
     assert code == 1 and "segmented already" in out and "-o" in out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d.seg.mcap"]
+
+
+def test_a_goal_target_that_is_null_is_refused(tmp_path: Path) -> None:
+    table = TABLE_YAML.replace("goal: null", "goal: {target: null}", 1)
+    assert table != TABLE_YAML
+    (tmp_path / "t.yaml").write_text(table)
+    code, out = _in(tmp_path, ["execute", "t.yaml", "--world", "tee", "--max-time", "1"])
+    assert code == 1 and "goal.target must be a target's name" in out, out
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.yaml"]
+
+
+def test_a_goal_the_world_lacks_is_said_at_the_start(tmp_path: Path) -> None:
+    table = TABLE_YAML.replace("goal: null", "goal: {target: red}", 1)
+    (tmp_path / "t.yaml").write_text(table)
+    code, out = _in(tmp_path, ["execute", "t.yaml", "--world", "corridor", "--max-time", "1"])
+    assert code == 0, out
+    first = out.strip().splitlines()[0]
+    assert first.startswith("warning: world 'corridor' has no target red"), out
+
+
+def test_segment_durations_add_up_to_the_demo(tmp_path: Path) -> None:
+    """Goal segments' seconds come from the stamps: they add up to the demo's span, not steps × 0.1 s."""
+    task = Path(__file__).resolve().parents[2] / "sample_logs" / "three-goals.task.yaml"
+    code, out = _in(tmp_path, ["simulate", "--teacher", str(task), "--duration", "60", "-o", "d.mcap"])
+    assert code == 0, out
+    code, out = _in(tmp_path, ["segment", "d.mcap"])
+    assert code == 0, out
+    secs = [float(m) for m in re.findall(r"segment \d+ → [^:]+: ([0-9.]+) s", out)]
+    assert len(secs) >= 2, out  # red is reached within the minute
+    assert abs(sum(secs) - 60.0) <= 0.05 * len(secs), (secs, out)

@@ -144,7 +144,12 @@ def test_a_key_takes_over_at_once_and_h_gives_control_back(tmp_path: Path) -> No
     assert all((cmds[t]["linear"]["x"], cmds[t]["angular"]["z"]) == (0.4, 0.0) for t in person)
     effects = [decode_teleop_input(orjson.loads(d)).effect for d in _by_tick(out, "/teleop/input").values()]
     assert effects[:2] == ["move", "handback"]
-    assert result.report["correction"] == {"person_ticks": 20, "network_ticks": 61, "takeovers": 1}
+    assert result.report["correction"] == {
+        "person_ticks": 20,
+        "network_ticks": 61,
+        "takeovers": 1,
+        "person_collisions": 0,
+    }
 
 
 def test_a_client_twist_takes_over_and_handback_seconds_without_input_return_it(tmp_path: Path) -> None:
@@ -350,3 +355,15 @@ def test_keyboard_correction_in_a_terminal_shows_who_drives(tmp_path: Path) -> N
     who = [lfd.decode_authority(d).authority for _, d in sorted(_by_tick(out, "/lfd/authority").items())]
     first = who.index("person")
     assert who[0] == "network" and "network" in who[first:]  # taken over, then handed back
+
+
+def test_a_collision_while_the_person_drives_is_the_persons_not_the_networks(tmp_path: Path) -> None:
+    """The person turns to the wall and drives into it: the correction entry counts the collision
+    as the person's, and the network's report (its verdict) does not."""
+    inputs: dict[float, list[Input]] = {1.0 + 0.25 * k: twist(0.0, 1.0) for k in range(7)}
+    inputs |= {2.75 + 0.25 * k: twist(0.4, 0.0) for k in range(16)}
+    result, _out = _correct(tmp_path, inputs, duration_s=9.0, handback_s=1.0)
+    c = result.report["correction"]
+    assert c["takeovers"] == 1 and c["person_collisions"] >= 1, c
+    assert result.report["collisions"] + c["person_collisions"] == result.teleop.run.collisions
+    assert result.report["collisions"] == result.teleop.run.collisions - c["person_collisions"]

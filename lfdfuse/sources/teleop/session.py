@@ -124,6 +124,8 @@ class TeleopSession:
         self.authority_source = ""
         self._person_at = 0.0  # clock time of the person's last input
         self.person_ticks = self.network_ticks = self.takeovers = 0
+        # collisions that began while the person, or the network, drove
+        self.person_collisions = self.network_collisions = 0
         self.clock = clock
         self.robot = robot
         self.camera = camera
@@ -191,6 +193,10 @@ class TeleopSession:
         self._goals(obs)
         if obs.blocked and not self._blocked:
             self._collisions += 1
+            if self.authority == "person":
+                self.person_collisions += 1
+            else:
+                self.network_collisions += 1
         self._blocked = obs.blocked
         if self.authority == "person":
             self.person_ticks += 1
