@@ -28,8 +28,10 @@ RESOLUTION = 1e-3
 FEW_LEVELS = 4
 #: a change smaller than this share of the axis's range is a smooth step (a continuous command)
 SMOOTH_STEP = 0.25
-#: the limit is this percentile of the nonzero magnitudes (``lower``: one wild value never sets it)
+#: the limit is anchored on this percentile of the nonzero magnitudes (``lower``: a value that occurs)
 LIMIT_PERCENTILE = 99.0
+#: a magnitude more than this many times the anchor is a wild command, never the limit
+WILD_FACTOR = 2.0
 
 CommandModel = Literal["continuous", "discrete"]
 
@@ -86,15 +88,16 @@ def classify_commands(t_ns: np.ndarray, v: np.ndarray, omega: np.ndarray) -> Com
 
 
 def percentile_limit(values: np.ndarray) -> float | None:
-    """A robot limit (speed or turn rate) from what it commanded or did: the
-    :data:`LIMIT_PERCENTILE` percentile of the nonzero magnitudes (``lower``: a value that occurs,
-    never set by one wild command in a hundred); the largest magnitude when all are zero; None
-    when there are none.
+    """A robot limit (speed or turn rate) from what it commanded: the largest nonzero magnitude
+    that is plausible beside the :data:`LIMIT_PERCENTILE` percentile of them all (at most
+    :data:`WILD_FACTOR` times it). Never the most common value (a person follower that mostly
+    turned at 0.1 rad/s and at most 1.8 gets 1.8), never one wild command (19.9 m/s among 0.3).
+    The largest magnitude when all are zero; None when there are none.
 
     >>> percentile_limit(np.array([0.3] * 30 + [0.0] * 10 + [19.9]))
     0.3
-    >>> percentile_limit(np.array([0.1] * 165 + list(np.linspace(0.2, 1.8, 400))))
-    1.77594
+    >>> percentile_limit(np.array([0.1] * 165 + list(np.linspace(0.2, 1.5, 400)) + [1.8]))
+    1.8
     """
     a = np.abs(np.asarray(values, dtype=np.float64))
     a = a[np.isfinite(a)]
@@ -103,4 +106,5 @@ def percentile_limit(values: np.ndarray) -> float | None:
     moving = a[a > RESOLUTION]
     if len(moving) == 0:
         return float(a.max())
-    return round(float(np.percentile(moving, LIMIT_PERCENTILE, method="lower")), 6)
+    anchor = float(np.percentile(moving, LIMIT_PERCENTILE, method="lower"))
+    return round(float(moving[moving <= WILD_FACTOR * anchor].max()), 6)

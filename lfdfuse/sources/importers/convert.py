@@ -22,7 +22,7 @@ import numpy as np
 from lfdfuse import __version__
 from lfdfuse.log import LogWriter
 from lfdfuse.log.messages import frame_transform, laser_scan, pose_in_frame, target_detections, twist
-from lfdfuse.robot.commands import CommandStructure, classify_commands, percentile_limit
+from lfdfuse.robot.commands import WILD_FACTOR, CommandStructure, classify_commands, percentile_limit
 from lfdfuse.robot.mount import Mount, base_geometry
 from lfdfuse.robot.readings import Detection, ScanGeometry
 from lfdfuse.robot.records import ScanRecord, same_geometry
@@ -240,16 +240,13 @@ def import_log(
 
 _IDENTITY_Q = {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}
 
-#: a command this many times the robust limit is implausible (a note says so)
-WILD_FACTOR = 2.0
-
 
 def robust_limit(values: np.ndarray, *, derived: bool) -> float | None:
     """A robot limit from commands (speed or turn rate), robust to a few wild ones.
 
-    Recorded commands: the 99th percentile of their nonzero magnitudes
-    (:func:`~lfdfuse.robot.commands.percentile_limit`), so a person follower that turned at up to
-    1.8 rad/s but mostly at 0.1 gets 1.8, not its most common value. Derived commands (odometry
+    Recorded commands: the largest nonzero magnitude within :data:`WILD_FACTOR` of their 99th
+    percentile (:func:`~lfdfuse.robot.commands.percentile_limit`), so a person follower that
+    turned at up to 1.8 rad/s but mostly at 0.1 gets 1.8, not its most common value. Derived commands (odometry
     noise, pose jumps): the 95th percentile of all of them.
 
     >>> robust_limit(np.array([0.3] * 30 + [0.0] * 10 + [19.9]), derived=False)
@@ -275,8 +272,8 @@ def _limits(
 ) -> tuple[float | None, float | None, str]:
     """Robot limits: the options, else the log's parameters, else the commands' robust range.
 
-    Recorded commands give the 99th percentile of their nonzero magnitudes (:func:`robust_limit`);
-    never the maximum, which one wild command sets, nor the most common value. Derived commands (odometry noise, pose jumps)
+    Recorded commands give the largest magnitude plausible beside their 99th percentile
+    (:func:`robust_limit`); never a wild command's, nor the most common value. Derived commands (odometry noise, pose jumps)
     give their 95th percentile. Where the largest command is implausible beside that (more than
     :data:`WILD_FACTOR` times it, or beyond the odometry's own 95th percentile as much), a note says so.
     """
