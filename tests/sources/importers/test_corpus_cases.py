@@ -290,6 +290,11 @@ def test_the_real_wall_follower_with_a_keyboard_stop(tmp_path: Path) -> None:
     )
     assert r.exit_code == 0, r.output
     assert "commands 240 (recorded on /cmd_vel by /wall_follow)" in r.output
+    from lfdfuse.cli import inspect  # noqa: F401  (registers the command)
+
+    r = CliRunner().invoke(app, ["inspect", str(bag)], terminal_width=200)
+    assert r.exit_code == 0, r.output
+    assert "2 publishers on /cmd_vel: /teleop_twist_keyboard (1), /wall_follow (240)" in r.output
 
 
 # --- ROS 1 frames with a leading slash ------------------------------------------------------------
