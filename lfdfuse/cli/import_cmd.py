@@ -160,10 +160,10 @@ def print_summary(s: ImportSummary, *, console: Console, given: TopicChoice = To
     if s.publishers:
         kept = "" if s.cmd_publisher is None else f" (kept {s.cmd_publisher})"
         console.print(f"  publishers on {s.topics.get('cmd', '/cmd_vel')}{kept}:")
-        for p in s.publishers:
-            first, last = ((t - s.start_ns) / 1e9 for t in (p.first_ns, p.last_ns))
-            n = f"{p.count} message{'s' if p.count != 1 else ''}"
-            console.print(f"    {p.name}: {n}, {first:.1f}–{last:.1f} s")
+        for pub in s.publishers:
+            first, last = ((t - s.start_ns) / 1e9 for t in (pub.first_ns, pub.last_ns))
+            count = f"{pub.count} message{'s' if pub.count != 1 else ''}"
+            console.print(f"    {pub.name}: {count}, {first:.1f}–{last:.1f} s")
     if s.goals:
         console.print(f"  goals: {', '.join(s.goals)}")
     if not s.dropped:

@@ -80,8 +80,10 @@ def detect_commands(
     if requested == "discrete":
         return "discrete"
     stated = metadata.get("command_model")
-    if stated == "continuous" or stated == "discrete":
-        return stated
+    if stated == "continuous":
+        return "continuous"
+    if stated == "discrete":
+        return "discrete"
     n = distinct_commands(v, omega)
     if n <= FEW_COMMANDS or (by_person(metadata, topics) and n <= PERSON_COMMANDS):
         return "discrete"

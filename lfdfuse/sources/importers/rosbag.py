@@ -134,7 +134,7 @@ class BagSource:
         """The nodes that published on the command topic (ROS 1 only), when there are several or
         one was asked for; checks ``--cmd-publisher``."""
         conns = [c for c in r.connections if c.topic == cmd]
-        names = {callerid(c) for c in conns} - {None}
+        names = {n for n in map(callerid, conns) if n is not None}
         wanted = self._cmd_publisher
         if wanted is not None:
             if cmd is None:
@@ -148,7 +148,7 @@ class BagSource:
                 raise SourceError(f"no publisher {wanted} on {cmd} (publishers: {', '.join(sorted(names))})")
         if len(names) < 2 and wanted is None:
             return ()
-        stamps: dict[str, list[int]] = {n: [] for n in names if n is not None}
+        stamps: dict[str, list[int]] = {n: [] for n in names}
         for conn, t_ns, _raw in r.messages(connections=conns):
             name = callerid(conn)
             if name is not None:
