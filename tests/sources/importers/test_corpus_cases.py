@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -54,7 +55,7 @@ def _real(rel: str) -> Path:
 # --- bags written here ---------------------------------------------------------------------------
 
 
-def _msgs(store: str) -> tuple[object, dict[str, object]]:
+def _msgs(store: str) -> tuple[Any, Any]:
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     ts = get_typestore(Stores.ROS2_HUMBLE if store == "ros2" else Stores.ROS1_NOETIC)
@@ -65,38 +66,38 @@ def _msgs(store: str) -> tuple[object, dict[str, object]]:
     return ts, ts.types
 
 
-def _scan(T: dict[str, object], frame: str, ros2: bool) -> object:
-    stamp = T["builtin_interfaces/msg/Time"](sec=0, nanosec=0)  # type: ignore[operator]
+def _scan(T: Any, frame: str, ros2: bool) -> object:
+    stamp = T["builtin_interfaces/msg/Time"](sec=0, nanosec=0)
     hdr = (
-        T["std_msgs/msg/Header"](stamp=stamp, frame_id=frame)  # type: ignore[operator]
+        T["std_msgs/msg/Header"](stamp=stamp, frame_id=frame)
         if ros2
-        else T["std_msgs/msg/Header"](seq=0, stamp=stamp, frame_id=frame)  # type: ignore[operator]
+        else T["std_msgs/msg/Header"](seq=0, stamp=stamp, frame_id=frame)
     )
-    return T["sensor_msgs/msg/LaserScan"](  # type: ignore[operator]
+    return T["sensor_msgs/msg/LaserScan"](
         header=hdr, angle_min=-math.pi / 2, angle_max=math.pi / 2, angle_increment=math.pi / 4,
         time_increment=0.0, scan_time=0.1, range_min=0.1, range_max=10.0,
         ranges=np.array([1.0, 2.0, 3.0, 4.0, 5.0], dtype=np.float32), intensities=np.zeros(0, dtype=np.float32),
     )  # fmt: skip
 
 
-def _twist(T: dict[str, object], v: float, w: float) -> object:
+def _twist(T: Any, v: float, w: float) -> object:
     vec = T["geometry_msgs/msg/Vector3"]
-    return T["geometry_msgs/msg/Twist"](linear=vec(x=v, y=0.0, z=0.0), angular=vec(x=0.0, y=0.0, z=w))  # type: ignore[operator]
+    return T["geometry_msgs/msg/Twist"](linear=vec(x=v, y=0.0, z=0.0), angular=vec(x=0.0, y=0.0, z=w))
 
 
-def _tf(T: dict[str, object], parent: str, child: str, x: float, yaw: float, ros2: bool) -> object:
-    stamp = T["builtin_interfaces/msg/Time"](sec=0, nanosec=0)  # type: ignore[operator]
+def _tf(T: Any, parent: str, child: str, x: float, yaw: float, ros2: bool) -> object:
+    stamp = T["builtin_interfaces/msg/Time"](sec=0, nanosec=0)
     hdr = (
-        T["std_msgs/msg/Header"](stamp=stamp, frame_id=parent)  # type: ignore[operator]
+        T["std_msgs/msg/Header"](stamp=stamp, frame_id=parent)
         if ros2
-        else T["std_msgs/msg/Header"](seq=0, stamp=stamp, frame_id=parent)  # type: ignore[operator]
+        else T["std_msgs/msg/Header"](seq=0, stamp=stamp, frame_id=parent)
     )
-    tr = T["geometry_msgs/msg/Transform"](  # type: ignore[operator]
-        translation=T["geometry_msgs/msg/Vector3"](x=x, y=0.0, z=0.1),  # type: ignore[operator]
-        rotation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)),  # type: ignore[operator]
+    tr = T["geometry_msgs/msg/Transform"](
+        translation=T["geometry_msgs/msg/Vector3"](x=x, y=0.0, z=0.1),
+        rotation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)),
     )
-    msg = T["geometry_msgs/msg/TransformStamped"](header=hdr, child_frame_id=child, transform=tr)  # type: ignore[operator]
-    return T["tf2_msgs/msg/TFMessage"](transforms=[msg])  # type: ignore[operator]
+    msg = T["geometry_msgs/msg/TransformStamped"](header=hdr, child_frame_id=child, transform=tr)
+    return T["tf2_msgs/msg/TFMessage"](transforms=[msg])
 
 
 T0 = 1_700_000_000_000_000_000
@@ -113,20 +114,20 @@ def ros1_bag(
     ts, T = _msgs("ros1")
     s = "/" if slash else ""
     with Writer(path) as w:
-        c_tf = w.add_connection("/tf", "tf2_msgs/msg/TFMessage", typestore=ts)  # type: ignore[arg-type]
-        c_scan = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts)  # type: ignore[arg-type]
+        c_tf = w.add_connection("/tf", "tf2_msgs/msg/TFMessage", typestore=ts)
+        c_scan = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts)
         conns = {
-            name: w.add_connection("/cmd_vel", "geometry_msgs/msg/Twist", typestore=ts, callerid=name)  # type: ignore[arg-type]
+            name: w.add_connection("/cmd_vel", "geometry_msgs/msg/Twist", typestore=ts, callerid=name)
             for name in publishers
         }
         tf = _tf(T, f"{s}base_link", f"{s}base_laser_link", -0.1, math.pi, ros2=False)
-        w.write(c_tf, T0, ts.serialize_ros1(tf, "tf2_msgs/msg/TFMessage"))  # type: ignore[attr-defined]
+        w.write(c_tf, T0, ts.serialize_ros1(tf, "tf2_msgs/msg/TFMessage"))
         for k in range(10):
             scan = _scan(T, f"{s}base_laser_link", ros2=False)
-            w.write(c_scan, T0 + k * 100_000_000 + 1, ts.serialize_ros1(scan, "sensor_msgs/msg/LaserScan"))  # type: ignore[attr-defined]
+            w.write(c_scan, T0 + k * 100_000_000 + 1, ts.serialize_ros1(scan, "sensor_msgs/msg/LaserScan"))
         for name, cmds in publishers.items():
             for t_s, v, om in cmds:
-                raw = ts.serialize_ros1(_twist(T, v, om), "geometry_msgs/msg/Twist")  # type: ignore[attr-defined]
+                raw = ts.serialize_ros1(_twist(T, v, om), "geometry_msgs/msg/Twist")
                 w.write(conns[name], T0 + round(t_s * 1e9) + 2, raw)
     return path
 
@@ -137,14 +138,14 @@ def ros2_folder(path: Path) -> Path:
 
     ts, T = _msgs("ros2")
     with Writer(path, version=8) as w:
-        c_scan = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts)  # type: ignore[arg-type]
-        c_cmd = w.add_connection("/cmd_vel", "geometry_msgs/msg/Twist", typestore=ts)  # type: ignore[arg-type]
+        c_scan = w.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=ts)
+        c_cmd = w.add_connection("/cmd_vel", "geometry_msgs/msg/Twist", typestore=ts)
         for k in range(5):
             t = T0 + k * 100_000_000
             w.write(
                 c_scan, t, ts.serialize_cdr(_scan(T, "base_link", ros2=True), "sensor_msgs/msg/LaserScan")
-            )  # type: ignore[attr-defined]
-            w.write(c_cmd, t + 1, ts.serialize_cdr(_twist(T, 0.2, 0.5 * (k % 2)), "geometry_msgs/msg/Twist"))  # type: ignore[attr-defined]
+            )
+            w.write(c_cmd, t + 1, ts.serialize_cdr(_twist(T, 0.2, 0.5 * (k % 2)), "geometry_msgs/msg/Twist"))
     return path
 
 
