@@ -81,6 +81,12 @@ def import_cmd(
         None, "--cmd", help="Velocity command topic (default: /cmd_vel or the busiest)."
     ),
     odom: str | None = typer.Option(None, "--odom", help="Odometry topic (default: /odom or the busiest)."),
+    cmd_publisher: str | None = typer.Option(
+        None,
+        "--cmd-publisher",
+        help="Keep only the commands this node published (ROS 1 callerid, e.g. /teleop_twist_keyboard); "
+        "default: every publisher's, merged in time order.",
+    ),
     cmd_from: CmdSource = typer.Option(
         CmdSource.AUTO,
         "--cmd-from",
@@ -112,10 +118,11 @@ def import_cmd(
       lfdfuse import neato.bag --teacher human -o neato.mcap
       lfdfuse import intel-corrected.log.gz -o intel.mcap
       lfdfuse import run.bag --scan /base_scan --cmd-from odom --goals goals.yaml
+      lfdfuse import wall_follow.bag --cmd-publisher /wall_follow
     """
     opts = ImportOptions(
         fmt=None if fmt is None else fmt.value,
-        topics=TopicChoice(scan, cmd, odom),
+        topics=TopicChoice(scan, cmd, odom, cmd_publisher),
         cmd_from=_CMD_FROM[cmd_from],
         mount=parse_mount(laser_mount) if laser_mount else None,
         v_max_mps=v_max,
@@ -148,6 +155,15 @@ def print_summary(s: ImportSummary, *, console: Console, given: TopicChoice = To
     v = "unknown" if s.v_max_mps is None else f"{s.v_max_mps:.3g} m/s"
     w = "unknown" if s.omega_max_rps is None else f"{s.omega_max_rps:.3g} rad/s"
     console.print(f"  robot limits: v_max {v}, ω_max {w} ({s.limits_from})")
+    if s.command_model is not None:
+        console.print(f"  commands: {s.command_model.describe()}")
+    if s.publishers:
+        kept = "" if s.cmd_publisher is None else f" (kept {s.cmd_publisher})"
+        console.print(f"  publishers on {s.topics.get('cmd', '/cmd_vel')}{kept}:")
+        for pub in s.publishers:
+            first, last = ((t - s.start_ns) / 1e9 for t in (pub.first_ns, pub.last_ns))
+            count = f"{pub.count} message{'s' if pub.count != 1 else ''}"
+            console.print(f"    {pub.name}: {count}, {first:.1f}–{last:.1f} s")
     if s.goals:
         console.print(f"  goals: {', '.join(s.goals)}")
     if not s.dropped:

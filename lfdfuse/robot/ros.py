@@ -27,7 +27,12 @@ WORLD_FRAMES = ("odom", "map", "world", "earth")
 
 
 def frame_name(name: str) -> str:
-    """A frame id without the leading slash ROS 1 frames may carry."""
+    """A frame id without the leading slash ROS 1 frames may carry (``/base_link`` and
+    ``base_link`` are one frame); every comparison of frames here goes through it.
+
+    >>> frame_name("/base_laser_link"), frame_name("odom")
+    ('base_laser_link', 'odom')
+    """
     return name.lstrip("/")
 
 
@@ -63,8 +68,12 @@ def transform_matrix(tr: Any) -> np.ndarray:
 
 
 def on_the_robot(parent: str, child: str) -> bool:
-    """Whether a transform can be part of the laser's mounting (neither end is a world frame)."""
-    return parent not in WORLD_FRAMES and child not in WORLD_FRAMES
+    """Whether a transform can be part of the laser's mounting (neither end is a world frame).
+
+    >>> on_the_robot("/odom", "/base_link"), on_the_robot("/base_link", "laser")
+    (False, True)
+    """
+    return frame_name(parent) not in WORLD_FRAMES and frame_name(child) not in WORLD_FRAMES
 
 
 @dataclass(frozen=True)
@@ -89,7 +98,9 @@ def laser_mount(
     """The mounting of the laser in frame ``laser``: the chain of ``edges`` (child → (parent,
     4×4 transform)) from it up to the first of ``bases`` it reaches. None when the chain does not
     reach a base frame (or loops, in a malformed tree); a tilted scanner is a
-    :class:`~lfdfuse.robot.mount.MountError`."""
+    :class:`~lfdfuse.robot.mount.MountError`. Frame names are compared without a leading slash."""
+    edges = {frame_name(c): (frame_name(p), tf) for c, (p, tf) in edges.items()}
+    laser, bases = frame_name(laser), tuple(frame_name(b) for b in bases)
     if laser in bases:
         return LaserMount(Mount(), laser, ())
     frame, m, passed = laser, np.eye(4), [laser]

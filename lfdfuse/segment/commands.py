@@ -1,14 +1,19 @@
 """Which command model a demo needs (DESIGN §6): ``continuous`` or ``discrete``.
 
 A scripted teacher's commands lie on the drive mapping and take thousands of values; a person at
-a keyboard or at Foxglove's Teleop panel holds a few commands. ``auto`` reads the log: a demo
-whose commands take at most :data:`FEW_COMMANDS` distinct values is discrete, and so is one that
-a person drove (provenance ``teacher: human`` or ``keyboard:…``, or a ``/teleop/input`` channel)
-with at most :data:`PERSON_COMMANDS` values (speed scaling keys multiply a keyboard's set).
+a keyboard or at Foxglove's Teleop panel holds a few commands. ``auto`` reads the log: an imported
+log states the structure of its commands (provenance ``command_model``, by
+:func:`lfdfuse.robot.commands.classify_commands`: a few values held, or many changing smoothly)
+and that is taken; otherwise a demo whose commands take at most :data:`FEW_COMMANDS` distinct
+values is discrete, and so is one that a person drove (provenance ``teacher: human`` or
+``keyboard:…``, or a ``/teleop/input`` channel) with at most :data:`PERSON_COMMANDS` values
+(speed scaling keys multiply a keyboard's set).
 
 >>> detect_commands(np.array([0.4, 0.4, 0.0]), np.array([0.0, 1.0, 1.0]), {}, ())
 'discrete'
 >>> detect_commands(np.linspace(0, 0.4, 50), np.linspace(-1, 1, 50), {}, ())
+'continuous'
+>>> detect_commands(np.array([0.1] * 22), np.linspace(0, 0.5, 22), {"command_model": "continuous", "teacher": "human"}, ())
 'continuous'
 """
 
@@ -27,7 +32,7 @@ CommandMode = Literal["auto", "continuous", "discrete"]
 class CommandChoice(StrEnum):
     """``--commands``: how the teacher commands (DESIGN §6)."""
 
-    AUTO = "auto"  # from the log: provenance, /teleop/input, the number of distinct commands
+    AUTO = "auto"  # from the log: import's command_model, provenance, /teleop/input, distinct commands
     CONTINUOUS = "continuous"  # on the drive mapping (a scripted teacher, a joystick)
     DISCRETE = "discrete"  # a few commands, held (a keyboard, Foxglove's Teleop panel)
 
@@ -73,6 +78,11 @@ def detect_commands(
     if requested == "continuous":
         return "continuous"
     if requested == "discrete":
+        return "discrete"
+    stated = metadata.get("command_model")
+    if stated == "continuous":
+        return "continuous"
+    if stated == "discrete":
         return "discrete"
     n = distinct_commands(v, omega)
     if n <= FEW_COMMANDS or (by_person(metadata, topics) and n <= PERSON_COMMANDS):

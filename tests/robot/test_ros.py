@@ -130,3 +130,18 @@ def test_odometry_and_twists_become_records(x: float, y: float, yaw: float) -> N
     for msg in (twist, SimpleNamespace(header=None, twist=twist)):  # Twist and TwistStamped
         c = twist_command(msg, 9)
         assert (c.t_ns, c.v_mps, c.omega_rps) == (9, x, yaw)
+
+
+def test_frames_with_a_leading_slash_are_the_same_frames() -> None:
+    """ROS 1 drivers wrote ``/base_link``; tf2 writes ``base_link``: one frame either way."""
+    tf = transform_matrix(_transform(-0.1, 0.0, 0.2, Rotation.from_euler("z", math.pi)))
+    for edges, laser, bases in (
+        ({"/base_laser_link": ("/base_link", tf)}, "/base_laser_link", ("base_link",)),
+        ({"base_laser_link": ("/base_link", tf)}, "/base_laser_link", ("base_link",)),
+        ({"/base_laser_link": ("base_link", tf)}, "base_laser_link", ("/base_link",)),
+    ):
+        found = laser_mount(edges, laser, bases)
+        assert found is not None and found.base == "base_link" and found.frames == ("base_laser_link",)
+        assert math.isclose(found.mount.x_m, -0.1, abs_tol=1e-12)
+    assert laser_mount({"/laser": ("/base_link", tf)}, "/base_link", ("base_link",)) is not None
+    assert not on_the_robot("/odom", "base_link") and on_the_robot("/base_link", "/laser")

@@ -22,13 +22,14 @@ import numpy as np
 from lfdfuse import __version__
 from lfdfuse.log import LogWriter
 from lfdfuse.log.messages import frame_transform, laser_scan, pose_in_frame, target_detections, twist
+from lfdfuse.robot.commands import WILD_FACTOR, CommandStructure, classify_commands, percentile_limit
 from lfdfuse.robot.mount import Mount, base_geometry
 from lfdfuse.robot.readings import Detection, ScanGeometry
 from lfdfuse.robot.records import ScanRecord, same_geometry
 from lfdfuse.sources.importers import open_source
 from lfdfuse.sources.importers.derive import commands_from_poses
 from lfdfuse.sources.importers.goals import REACH_M, Goal, goal_detections
-from lfdfuse.sources.importers.records import SourceError, TopicChoice
+from lfdfuse.sources.importers.records import Publisher, SourceError, TopicChoice
 
 ODOM_FRAME = "odom"
 CmdFrom = Literal["auto", "cmd", "odom"]
@@ -71,6 +72,10 @@ class ImportSummary:
     dropped: dict[str, int] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
     goals: tuple[str, ...] = ()
+    command_model: CommandStructure | None = None
+    publishers: tuple[Publisher, ...] = ()
+    cmd_publisher: str | None = None
+    start_ns: int = 0
 
 
 def import_log(
@@ -131,8 +136,16 @@ def import_log(
         cmd_v = np.array([c.v_mps for c in recorded], dtype=np.float64)
         cmd_w = np.array([c.omega_rps for c in recorded], dtype=np.float64)
         commands_from = f"recorded on {info.topics.get('cmd')}"
+        if info.cmd_publisher is not None:
+            commands_from += f" by {info.cmd_publisher}"
+        elif len(info.publishers) > 1:
+            notes.append(
+                f"{len(info.publishers)} publishers on {info.topics.get('cmd')}, merged in time order "
+                "(keep one with --cmd-publisher NAME)"
+            )
     if len(cmd_t) == 0:
         notes.append("no /cmd_vel: the log has neither commands nor odometry, so it cannot be segmented")
+    structure = classify_commands(cmd_t, cmd_v, cmd_w) if len(cmd_t) else None
 
     odom_twist = None
     if len(pose_t) > 1:
@@ -159,6 +172,12 @@ def import_log(
         "dt_s": repr(round(dt_s, 6)),
         "start_ns": str(int(scan_t[0])),
     }
+    if structure is not None:
+        meta["command_model"] = structure.model
+    if info.cmd_publisher is not None:
+        meta["cmd_publisher"] = info.cmd_publisher
+    elif len(info.publishers) > 1:
+        meta["cmd_publishers"] = ",".join(p.name for p in info.publishers)
     if v_max is not None:
         meta["v_max_mps"] = repr(v_max)
     if w_max is not None:
@@ -212,19 +231,23 @@ def import_log(
         dropped=dict(sorted(Counter(src.dropped).items())),
         notes=tuple(notes),
         goals=tuple(f"goal_{g.name}" for g in options.goals),
+        command_model=structure,
+        publishers=info.publishers,
+        cmd_publisher=info.cmd_publisher,
+        start_ns=int(scan_t[0]),
     )
 
 
 _IDENTITY_Q = {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}
 
-#: a command value held by at least this share of the moving commands is one of their modes
-MODE_SHARE = 0.05
-#: a command this many times the robust limit is implausible (a note says so)
-WILD_FACTOR = 2.0
-
 
 def robust_limit(values: np.ndarray, *, derived: bool) -> float | None:
     """A robot limit from commands (speed or turn rate), robust to a few wild ones.
+
+    Recorded commands: the largest nonzero magnitude within :data:`WILD_FACTOR` of their 99th
+    percentile (:func:`~lfdfuse.robot.commands.percentile_limit`), so a person follower that
+    turned at up to 1.8 rad/s but mostly at 0.1 gets 1.8, not its most common value. Derived commands (odometry
+    noise, pose jumps): the 95th percentile of all of them.
 
     >>> robust_limit(np.array([0.3] * 30 + [0.0] * 10 + [19.9]), derived=False)
     0.3
@@ -234,14 +257,7 @@ def robust_limit(values: np.ndarray, *, derived: bool) -> float | None:
         return None
     if derived:
         return float(np.percentile(a, 95.0))
-    moving = a[a > 1e-3]
-    if len(moving) == 0:
-        return float(a.max())
-    vals, counts = np.unique(np.round(moving, 3), return_counts=True)
-    modes = vals[counts >= MODE_SHARE * len(moving)]
-    if len(modes) and counts.max() >= 2:
-        return float(modes.max())
-    return float(np.percentile(moving, 98.0))
+    return percentile_limit(a)
 
 
 def _limits(
@@ -256,9 +272,8 @@ def _limits(
 ) -> tuple[float | None, float | None, str]:
     """Robot limits: the options, else the log's parameters, else the commands' robust range.
 
-    Recorded commands give the largest of their *modes* (a value holding at least
-    :data:`MODE_SHARE` of the moving commands: a keyboard's speeds), else their 98th percentile;
-    never the maximum, which one wild command sets. Derived commands (odometry noise, pose jumps)
+    Recorded commands give the largest magnitude plausible beside their 99th percentile
+    (:func:`robust_limit`); never a wild command's, nor the most common value. Derived commands (odometry noise, pose jumps)
     give their 95th percentile. Where the largest command is implausible beside that (more than
     :data:`WILD_FACTOR` times it, or beyond the odometry's own 95th percentile as much), a note says so.
     """

@@ -70,7 +70,13 @@ def _plan(path: Path, fmt: str, counts: dict[str, int]) -> ImportPlan:
         commands_from = f"derived from odometry on {odom}"
     else:
         commands_from = "none: no commands and no odometry, so the demo cannot be segmented"
-    return ImportPlan(dict(info.topics), commands_from, info.mount, info.mount_from, notes=info.notes)
+    notes = info.notes
+    if len(info.publishers) > 1:
+        who = ", ".join(f"{p.name} ({p.count})" for p in info.publishers)
+        notes += (
+            f"{len(info.publishers)} publishers on {cmd}: {who}; import merges them (--cmd-publisher NAME keeps one)",
+        )
+    return ImportPlan(dict(info.topics), commands_from, info.mount, info.mount_from, notes=notes)
 
 
 def summarise(path: Path, *, fmt: str | None = None) -> LogSummary:

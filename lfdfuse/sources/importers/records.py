@@ -25,12 +25,24 @@ class SourceError(LfdError):
 
 
 @dataclass(frozen=True)
+class Publisher:
+    """One node publishing on a topic (a ROS 1 connection's ``callerid``): how many messages, the
+    first and last stamp (int64 ns)."""
+
+    name: str
+    count: int
+    first_ns: int
+    last_ns: int
+
+
+@dataclass(frozen=True)
 class SourceInfo:
     """What an importer found in a log, before reading its messages.
 
     ``topics`` maps a role (``scan``, ``cmd``, ``odom``) to the topic or line type used;
     ``mount`` is None when the log does not say where the laser sits; robot limits are None
-    when the log does not state them.
+    when the log does not state them. ``publishers`` names the nodes publishing the commands when
+    the log records several (ROS 1) or one was picked (``cmd_publisher``); empty otherwise.
     """
 
     format: str
@@ -41,6 +53,8 @@ class SourceInfo:
     omega_max_rps: float | None = None
     teacher: str = "unknown"
     notes: tuple[str, ...] = ()
+    publishers: tuple[Publisher, ...] = ()
+    cmd_publisher: str | None = None
 
 
 class Source(Protocol):
@@ -58,11 +72,13 @@ class Source(Protocol):
 
 @dataclass(frozen=True)
 class TopicChoice:
-    """Topics the user named (None: pick automatically)."""
+    """Topics the user named (None: pick automatically); ``cmd_publisher``: only the commands this
+    node published (ROS 1 ``callerid``; None: every publisher's, merged in time order)."""
 
     scan: str | None = None
     cmd: str | None = None
     odom: str | None = None
+    cmd_publisher: str | None = None
 
 
 def stamp_ns(text: str) -> int:

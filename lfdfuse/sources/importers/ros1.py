@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from lfdfuse.sources.importers.records import SourceError, TopicChoice
+from lfdfuse.sources.importers.records import TopicChoice
 from lfdfuse.sources.importers.rosbag import BagSource, is_rosbag1
 
 NAME = "ros1"
@@ -19,9 +19,8 @@ def detect(path: Path) -> bool:
 
 
 def bag_path(path: Path) -> Path:
-    """``path`` when rosbags can read it as a ROS 1 bag, else a one-line :class:`SourceError`."""
-    if path.suffix != ".bag":  # rosbags tells the bag generations apart by the suffix
-        raise SourceError(f"{path}: a ROS 1 bag must be named *.bag to be read")
+    """What rosbags reads: the bag itself, whatever it is named (:class:`.rosbag.BagReader` is
+    told the generation, it does not guess it from the ``.bag`` suffix)."""
     return path
 
 

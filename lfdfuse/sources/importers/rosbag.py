@@ -19,10 +19,13 @@ from typing import Any
 
 import numpy as np
 from rosbags.highlevel import AnyReader, AnyReaderError
+from rosbags.rosbag1 import Reader as Reader1
 from rosbags.rosbag1 import ReaderError as Reader1Error
+from rosbags.rosbag2 import Reader as Reader2
 from rosbags.rosbag2 import ReaderError as Reader2Error
 from rosbags.serde import SerdeError
 from rosbags.typesys import Stores, TypesysError, get_typestore
+from rosbags.typesys.store import Typestore
 
 from lfdfuse.robot.mount import Mount, MountError
 from lfdfuse.robot.records import CommandRecord, PoseRecord, ScanRecord
@@ -36,7 +39,7 @@ from lfdfuse.robot.ros import (
     transform_matrix,
     twist_command,
 )
-from lfdfuse.sources.importers.records import SourceError, SourceInfo, TopicChoice
+from lfdfuse.sources.importers.records import Publisher, SourceError, SourceInfo, TopicChoice
 
 SCAN_TYPES = ("sensor_msgs/msg/LaserScan",)
 CMD_TYPES = ("geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped")
@@ -60,13 +63,43 @@ def one_line(exc: BaseException, width: int = 200) -> str:
     return text if len(text) <= width else text[: width - 1] + "…"
 
 
+class BagReader(AnyReader):
+    """``rosbags``' reader, told which bag generation ``path`` is instead of guessing it from the
+    name: ``AnyReader`` takes anything named ``*.bag`` for ROS 1, so a rosbag2 folder named
+    ``test_drive.bag`` (a common layout) failed with "Is a directory", and a ROS 1 bag not named
+    ``*.bag`` was read as ROS 2. The format's ``detect`` decides by content; this reads it so."""
+
+    def __init__(self, path: Path, *, ros2: bool, default_typestore: Typestore | None = None) -> None:
+        if not path.exists():
+            raise FileNotFoundError(f"no such file or folder: {path}")
+        self.paths = [path]
+        self.is2 = ros2
+        self.stack = None
+        self.connections = []
+        self.default_typestore = default_typestore
+        self.typestore = get_typestore(Stores.EMPTY)
+        try:
+            self.readers = [Reader2(path)] if ros2 else [Reader1(path)]
+        except (Reader1Error, Reader2Error) as err:
+            raise AnyReaderError(*err.args) from None
+
+
+def callerid(conn: Any) -> str | None:
+    """The node that published on a ROS 1 connection (its header's ``callerid``); rosbag2 records
+    none."""
+    name = getattr(conn.ext, "callerid", None)
+    return str(name) if name else None
+
+
 class BagSource:
     """A ROS 1 or ROS 2 bag opened for import (see the module docstring)."""
 
     def __init__(self, path: Path, *, fmt: str, topics: TopicChoice, ros2: bool) -> None:
         self.path = path
         self.dropped: Counter[str] = Counter()
+        self._ros2 = ros2
         self._store = get_typestore(Stores.ROS2_HUMBLE if ros2 else Stores.ROS1_NOETIC)
+        self._cmd_publisher = topics.cmd_publisher
         with self._open() as r:
             conns = r.connections
             scan = _pick(conns, SCAN_TYPES, topics.scan, "/scan", "laser scans", required=True)
@@ -74,6 +107,7 @@ class BagSource:
             odom = _pick(conns, ODOM_TYPES, topics.odom, "/odom", "odometry")
             assert scan is not None
             self._topics = {"scan": scan, "cmd": cmd, "odom": odom}
+            publishers = self._publishers(r, cmd)
             scan_frame = self._first(r, scan, lambda m: frame_name(m.header.frame_id)) or ""
             base = self._first(r, odom, lambda m: frame_name(m.child_frame_id)) if odom else None
             mount, used = self._mount(r, scan_frame, base)
@@ -84,18 +118,47 @@ class BagSource:
             mount=mount,
             mount_from=used,
             notes=tuple(notes),
+            publishers=publishers,
+            cmd_publisher=self._cmd_publisher,
         )
 
     @contextmanager
     def _open(self) -> Iterator[AnyReader]:
         try:
-            with AnyReader([self.path], default_typestore=self._store) as reader:
+            with BagReader(self.path, ros2=self._ros2, default_typestore=self._store) as reader:
                 yield reader
         except _READ_ERRORS as exc:
             raise SourceError(f"{self.path}: cannot read the bag ({one_line(exc)})") from exc
 
+    def _publishers(self, r: AnyReader, cmd: str | None) -> tuple[Publisher, ...]:
+        """The nodes that published on the command topic (ROS 1 only), when there are several or
+        one was asked for; checks ``--cmd-publisher``."""
+        conns = [c for c in r.connections if c.topic == cmd]
+        names = {n for n in map(callerid, conns) if n is not None}
+        wanted = self._cmd_publisher
+        if wanted is not None:
+            if cmd is None:
+                raise SourceError("--cmd-publisher: the bag has no velocity command topic")
+            if not names:
+                raise SourceError(
+                    f"--cmd-publisher: the bag does not record who published on {cmd} "
+                    "(rosbag2 stores no publisher)"
+                )
+            if wanted not in names:
+                raise SourceError(f"no publisher {wanted} on {cmd} (publishers: {', '.join(sorted(names))})")
+        if len(names) < 2 and wanted is None:
+            return ()
+        stamps: dict[str, list[int]] = {n: [] for n in names}
+        for conn, t_ns, _raw in r.messages(connections=conns):
+            name = callerid(conn)
+            if name is not None:
+                stamps[name].append(int(t_ns))
+        return tuple(Publisher(name, len(ts), min(ts), max(ts)) for name, ts in sorted(stamps.items()) if ts)
+
     def _messages(self, r: AnyReader, topic: str | None) -> Iterator[tuple[int, Any]]:
         conns = [c for c in r.connections if c.topic == topic]
+        if topic is not None and topic == self._topics.get("cmd") and self._cmd_publisher is not None:
+            conns = [c for c in conns if callerid(c) == self._cmd_publisher]
         if not conns:  # rosbags reads *every* message when given no connection
             return
         for conn, t_ns, raw in r.messages(connections=conns):
@@ -217,7 +280,7 @@ def bag_listing(path: Path, *, ros2: bool) -> BagListing:
     else:
         storage = "ROS 1 bag v2.0"
     try:
-        with AnyReader([path], default_typestore=store) as r:
+        with BagReader(path, ros2=ros2, default_typestore=store) as r:
             count = int(r.message_count)
             start = int(r.start_time) if count else None
             end = int(r.end_time) - 1 if count else None  # rosbags' end time is one past the last message
