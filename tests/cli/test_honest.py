@@ -159,9 +159,11 @@ def test_a_bad_script_yaml_is_one_line_naming_the_line(in_tmp: Path) -> None:
 
 @pytest.mark.parametrize("lag", ["-0.5", "1.5", "30"])
 def test_a_lag_the_search_does_not_cover_is_refused(short_demo: Path, tmp_path: Path, lag: str) -> None:
+    """A value outside what the option accepts: a usage error (exit 2) naming the range searched."""
     out = tmp_path / "x.seg.mcap"
-    line = _one_line_error(["segment", str(short_demo.with_name("d.mcap")), "--lag", lag, "-o", str(out)])
-    assert "--lag" in line and "0–1 s" in line, line
+    res = runner.invoke(app, ["segment", str(short_demo.with_name("d.mcap")), "--lag", lag, "-o", str(out)])
+    text = " ".join(re.sub(r"[│╭╮╰╯─]", " ", res.output).split())
+    assert res.exit_code == 2 and "--lag" in text and "0–1 s the lag search covers" in text, res.output
     assert not out.exists()
 
 
