@@ -11,6 +11,15 @@ under the drive mapping (:func:`~lfdfuse.control.command.command_to_heading`), s
 more than about 65° is a turn in place. The loop runs on the simulated clock (faster than real
 time); every press is recorded on ``/teleop/input`` as a teleop log records it.
 
+That is one person, ``steady``. People differ: :class:`KeyboardParams` is a person model and
+:data:`PERSONS` the zoo of named ones (``simulate --person NAME``, or each parameter set on its
+own). A person reacts ``reaction_s`` late (0 to 0.6 s in the zoo), presses every ``period_s``
+(0.3 to 1.5 s), chooses the key by the nearest heading or by thresholds on the size of the wanted
+turn (:func:`threshold_key`), now and then slips (``lapse``: a neighbouring key, or a look
+without a press, so the old key is held one period more), stops for a moment and drives on
+(``stop_go``), or cuts corners (``corner_m``: the teacher's route is aimed at farther ahead).
+Learning is judged across the zoo (the bench suite ``keys``), never on one person.
+
 >>> from lfdfuse.control.command import DriveParams
 >>> nearest_key(0.0, DriveParams()), nearest_key(0.5, DriveParams()), nearest_key(-2.0, DriveParams())
 ('i', 'u', 'l')

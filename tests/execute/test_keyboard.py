@@ -5,7 +5,8 @@ every period, jittered, held); the demo is segmented and estimated with the comm
 defaults (``--lag auto``, ``--commands auto``: the discrete command model at the press lag) and
 the learned table drives. ``make bench`` (suite ``keys``) measures the same cases over more
 seeds; here the three-goal table learned at keys every 1.0 s (seed 1) must complete at least 2
-of 3 perturbed starts, and each style table must take its own branch at every tee.
+of 3 perturbed starts, and each style table must take its own branch at every tee; two persons
+of the zoo (``simulate --person``) teach the styles too.
 """
 
 from __future__ import annotations
@@ -43,3 +44,22 @@ def test_keyboard_taught_styles_take_their_branch_in_another_world(tmp_path: Pat
         )
         got = tee_branches(table, folder=tmp_path, label=style)
         assert got == [style == "keep-left"] * len(got), (style, got)
+
+
+def test_zoo_taught_styles_take_their_branch(tmp_path: Path) -> None:
+    """Two persons of the zoo far from ``--keys``'s own: a late one (0.6 s, a key every 0.8 s)
+    teaches keep-left, a coarse one (a key every 1.2 s by thresholds on the turn) keep-right;
+    each learned table takes its own branch at both tees (``make bench`` runs the whole zoo)."""
+    for person, style in (("late", "keep-left"), ("coarse", "keep-right")):
+        table = learn(
+            [Leg(None, style)],
+            world="building",
+            keys=None,
+            person=person,
+            seed=11,
+            folder=tmp_path,
+            duration_s=300.0,
+            segment_kw={"behaviors": STYLE_BEHAVIORS},
+        )
+        got = tee_branches(table, folder=tmp_path, label=f"{person}-{style}")
+        assert got == [style == "keep-left"] * len(got), (person, style, got)
