@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import typer
 
@@ -28,6 +29,7 @@ from lfdfuse.robot.pose import Pose
 from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import STYLES
 from lfdfuse.sources.teachers import NetworkTeacher, TeacherParams, teacher_from
+from lfdfuse.sources.typist import CHOICES, PERSONS, KeyboardParams
 from lfdfuse.world.model import DEFAULT_WORLD, load_world
 
 
@@ -61,6 +63,69 @@ def simulate_cmd(
         callback=finite,
         help="The teacher as a person at a keyboard: the nearest teleop key every KEYS seconds (jittered), held.",
     ),
+    person: str | None = typer.Option(
+        None,
+        "--person",
+        help=f"The keyboard person, a named model of the zoo ({', '.join(PERSONS)}); --keys sets its period.",
+        rich_help_panel="Person at a keyboard",
+    ),
+    reaction: float | None = typer.Option(
+        None,
+        "--reaction",
+        min=0.0,
+        max=5.0,
+        callback=finite,
+        help="Person: seconds between what the teacher wants and the key that answers it (default 0.2).",
+        rich_help_panel="Person at a keyboard",
+    ),
+    choose: str | None = typer.Option(
+        None,
+        "--choose",
+        help="Person: the key by the nearest heading ('nearest') or by thresholds on the wanted turn ('thresholds').",
+        rich_help_panel="Person at a keyboard",
+    ),
+    thresholds: str | None = typer.Option(
+        None,
+        "--thresholds",
+        help="Person: ARC,SPIN degrees of wanted turn beyond which an arc, a turn in place is pressed (implies --choose thresholds).",
+        rich_help_panel="Person at a keyboard",
+    ),
+    lapse: float | None = typer.Option(
+        None,
+        "--lapse",
+        min=0.0,
+        max=1.0,
+        callback=finite,
+        help="Person: chance a press slips, half a wrong (neighbouring) key, half a late one.",
+        rich_help_panel="Person at a keyboard",
+    ),
+    stop_go: float | None = typer.Option(
+        None,
+        "--stop-go",
+        min=0.0,
+        max=0.99,
+        callback=finite,
+        help="Person: chance a press is a stop held --pause seconds before driving on.",
+        rich_help_panel="Person at a keyboard",
+    ),
+    pause: float | None = typer.Option(
+        None,
+        "--pause",
+        min=0.0,
+        max=60.0,
+        callback=finite,
+        help="Person: how long a stop-and-go stop is held (s, default 1).",
+        rich_help_panel="Person at a keyboard",
+    ),
+    corner_cut: float | None = typer.Option(
+        None,
+        "--corner-cut",
+        min=0.0,
+        max=10.0,
+        callback=finite,
+        help="Person: cut corners, aiming this many metres farther along the route.",
+        rich_help_panel="Person at a keyboard",
+    ),
     out: Path = typer.Option(Path("demo.mcap"), "--out", "-o", help="Output MCAP file."),
 ) -> None:
     """Drive a scripted teacher in a world and record the demonstration as MCAP.
@@ -74,6 +139,8 @@ def simulate_cmd(
       lfdfuse simulate --world building --teacher task.yaml --seed 3 -o task.mcap
       lfdfuse simulate --teacher fusion.yaml --heading-noise 5 -o truth.mcap
       lfdfuse simulate --teacher task.yaml --keys 0.5 -o keys.mcap
+      lfdfuse simulate --teacher task.yaml --person sloppy -o sloppy.mcap
+      lfdfuse simulate --teacher task.yaml --person late --keys 1.0 --lapse 0.1 -o mine.mcap
     """
     check_outputs([out], [existing(world), existing(teacher)])
     w = load_world(world)
@@ -82,9 +149,19 @@ def simulate_cmd(
     tp = TeacherParams()
     if heading_noise is not None:
         tp = replace(tp, heading_noise_rad=math.radians(heading_noise))
+    model = person_model(
+        person,
+        reaction=reaction,
+        choose=choose,
+        thresholds=thresholds,
+        lapse=lapse,
+        stop_go=stop_go,
+        pause=pause,
+        corner_cut=corner_cut,
+    )
     if isinstance(spec, NetworkTeacher):
-        if keys is not None:
-            raise ConfigError("--keys needs a style or task teacher, not a fusion table")
+        if keys is not None or model is not None:
+            raise ConfigError("--keys and --person need a style or task teacher, not a fusion table")
         eopts = ExecuteOptions(
             world=w,
             table=parse_table(spec.data),
@@ -109,10 +186,57 @@ def simulate_cmd(
         sensor_noise_m=noise,
         teacher=tp,
         keys_period_s=keys,
+        person=None if model is None else model[1],
+        person_name="custom" if model is None else model[0],
     )
     with progress_bar("simulate") as update:
         summary = simulate(opts, out=out, progress=update)
-    print_run(
-        summary,
-        title=f"simulate {w.name} / {spec.name}" + ("" if keys is None else f" at a keyboard ({keys:g} s)"),
-    )
+    kb, at = opts.keyboard, ""
+    if kb is not None:
+        at = f" at a keyboard ({'' if model is None else model[0] + ', '}{kb.period_s:g} s)"
+    print_run(summary, title=f"simulate {w.name} / {spec.name}{at}")
+
+
+def person_model(
+    name: str | None,
+    *,
+    reaction: float | None,
+    choose: str | None,
+    thresholds: str | None,
+    lapse: float | None,
+    stop_go: float | None,
+    pause: float | None,
+    corner_cut: float | None,
+) -> tuple[str, KeyboardParams] | None:
+    """The person the options name and set (its name, ``custom`` when only set), or None when
+    none of them is given (``--keys`` alone keeps its own person)."""
+    given = {
+        "reaction_s": reaction,
+        "choice": choose,
+        "lapse": lapse,
+        "stop_go": stop_go,
+        "pause_s": pause,
+        "corner_m": corner_cut,
+    }
+    changes: dict[str, Any] = {k: v for k, v in given.items() if v is not None}
+    if thresholds is not None:
+        parts = thresholds.split(",")
+        try:
+            arc, spin = (float(p) for p in parts)
+        except ValueError:
+            raise ConfigError(f"--thresholds wants ARC,SPIN in degrees, got {thresholds!r}") from None
+        if not (0.0 <= arc <= spin <= 180.0):
+            raise ConfigError(f"--thresholds wants 0 ≤ ARC ≤ SPIN ≤ 180 degrees, got {thresholds!r}")
+        changes |= {"arc_deg": arc, "spin_deg": spin}
+        changes.setdefault("choice", "thresholds")
+    if "choice" in changes and changes["choice"] not in CHOICES:
+        raise ConfigError(f"--choose is one of {', '.join(CHOICES)}, got {changes['choice']!r}")
+    if name is None and not changes:
+        return None
+    if name is not None and name not in PERSONS:
+        raise ConfigError(f"no person {name!r} in the zoo; there are {', '.join(PERSONS)}")
+    base = PERSONS[name] if name is not None else KeyboardParams()
+    label = name if name is not None else "custom"
+    if changes and name is not None:
+        label += "+" + ",".join(sorted(changes))
+    return label, replace(base, **changes)

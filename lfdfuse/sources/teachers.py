@@ -46,6 +46,7 @@ class TeacherParams:
     noise_correlation: float = 0.8  # AR(1) coefficient per control period
     delay_steps: int = 1  # reaction delay in control periods
     side_sector_rad: float = math.radians(50.0)  # half width of the side sectors
+    lookahead_cells: int = 9  # the route's tangent is taken this many planner cells ahead (more: corners cut)
 
 
 def side_range(
@@ -231,7 +232,7 @@ class StyleTeacher:
             gx, gy = self._tour_point(pose)
         fld = self.planner.field(gx, gy)
         near = self.planner.follow(pose.x, pose.y, fld, 2)
-        far = self.planner.follow(pose.x, pose.y, fld, 9)
+        far = self.planner.follow(pose.x, pose.y, fld, self.p.lookahead_cells)
         tx, ty = far[0] - near[0], far[1] - near[1]
         if tx == 0.0 and ty == 0.0:
             tx, ty = gx - pose.x, gy - pose.y

@@ -11,6 +11,15 @@ under the drive mapping (:func:`~lfdfuse.control.command.command_to_heading`), s
 more than about 65° is a turn in place. The loop runs on the simulated clock (faster than real
 time); every press is recorded on ``/teleop/input`` as a teleop log records it.
 
+That is one person, ``steady``. People differ: :class:`KeyboardParams` is a person model and
+:data:`PERSONS` the zoo of named ones (``simulate --person NAME``, or each parameter set on its
+own). A person reacts ``reaction_s`` late (0 to 0.6 s in the zoo), presses every ``period_s``
+(0.3 to 1.5 s), chooses the key by the nearest heading or by thresholds on the size of the wanted
+turn (:func:`threshold_key`), now and then slips (``lapse``: a neighbouring key, or a look
+without a press, so the old key is held one period more), stops for a moment and drives on
+(``stop_go``), or cuts corners (``corner_m``: the teacher's route is aimed at farther ahead).
+Learning is judged across the zoo (the bench suite ``keys``), never on one person.
+
 >>> from lfdfuse.control.command import DriveParams
 >>> nearest_key(0.0, DriveParams()), nearest_key(0.5, DriveParams()), nearest_key(-2.0, DriveParams())
 ('i', 'u', 'l')
@@ -20,7 +29,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -35,13 +44,71 @@ from lfdfuse.sources.teleop.keys import KeyState, press
 FORWARD_KEYS: tuple[str, ...] = ("i", "u", "o", "j", "l")
 
 
+CHOICES: tuple[str, ...] = ("nearest", "thresholds")
+
+
 @dataclass(frozen=True)
 class KeyboardParams:
-    """How the keyboard person presses."""
+    """How a keyboard person presses: one person model of the zoo (:data:`PERSONS`).
+
+    The defaults are ``simulate --keys``'s person (``steady``); a parameter at its default adds
+    no random draw, so that person's demos stay what they were.
+    """
 
     period_s: float = 0.5  # mean time between presses
     jitter: float = 0.4  # each interval is period × U(1 − jitter, 1 + jitter)
     reaction_s: float = 0.2  # a press answers what the teacher wanted this long ago
+    choice: str = "nearest"  # "nearest": the key whose heading is nearest; "thresholds": by the turn's size
+    arc_deg: float = 20.0  # thresholds: a wanted turn beyond this is an arc (u/o) …
+    spin_deg: float = 65.0  # … and beyond this a turn in place (j/l)
+    lapse: float = 0.0  # chance a press slips: half a wrong (neighbouring) key, half a late one
+    stop_go: float = 0.0  # chance a press is a stop (k) held for pause_s before driving on
+    pause_s: float = 1.0
+    corner_m: float = 0.0  # corners cut: the teacher's route is aimed at this much farther ahead
+
+    def check(self) -> None:
+        """Raise :class:`ValueError` naming the first parameter out of its range."""
+        ok = {
+            "period_s": self.period_s > 0 and math.isfinite(self.period_s),
+            "jitter": 0.0 <= self.jitter < 1.0,
+            "reaction_s": 0.0 <= self.reaction_s <= 5.0,
+            "choice": self.choice in CHOICES,
+            "arc_deg": 0.0 <= self.arc_deg <= self.spin_deg <= 180.0,
+            "spin_deg": 0.0 <= self.spin_deg <= 180.0,
+            "lapse": 0.0 <= self.lapse <= 1.0,
+            "stop_go": 0.0 <= self.stop_go < 1.0,
+            "pause_s": 0.0 <= self.pause_s <= 60.0 and math.isfinite(self.pause_s),
+            "corner_m": 0.0 <= self.corner_m <= 10.0,
+        }
+        for name, good in ok.items():
+            if not good:
+                raise ValueError(f"person model: {name} = {getattr(self, name)!r} is out of range")
+
+    def describe(self) -> str:
+        """Every parameter as ``name=value`` (the demo's provenance ``person_model``)."""
+        return " ".join(f"{f.name}={getattr(self, f.name)!r}" for f in fields(self))
+
+
+#: the zoo: named person models (``simulate --person NAME``), each a plausible way to drive by keys
+PERSONS: dict[str, KeyboardParams] = {
+    # simulate --keys's person: a key every 0.5 s, nearest heading, reacting in 0.2 s
+    "steady": KeyboardParams(),
+    # quick hands: a key every 0.3 s answering what is wanted now
+    "prompt": KeyboardParams(period_s=0.3, reaction_s=0.0),
+    # slow to react: answers what was wanted 0.6 s ago, a key every 0.8 s
+    "late": KeyboardParams(period_s=0.8, reaction_s=0.6),
+    # few, coarse keys: every 1.2 s, straight until the turn is large, turns in place only past 80°
+    "coarse": KeyboardParams(period_s=1.2, reaction_s=0.3, choice="thresholds", arc_deg=30.0, spin_deg=80.0),
+    # careless: one press in six a wrong or a late key
+    "sloppy": KeyboardParams(period_s=0.6, reaction_s=0.3, lapse=0.16),
+    # stops now and then (one press in eight) for a second to look, then drives on
+    "stop-and-go": KeyboardParams(period_s=0.7, reaction_s=0.3, stop_go=0.12, pause_s=1.0),
+    # aims 2 m farther along the route than the teacher: turns early, cuts the inside of corners
+    "corner-cutter": KeyboardParams(period_s=0.6, reaction_s=0.2, corner_m=2.0),
+}
+
+#: the order the forward keys lie in, left to right: a wrong key is a neighbour of the right one
+_SIDE_ORDER: tuple[str, ...] = ("j", "u", "i", "o", "l")
 
 
 def key_headings(keys: KeyState, drive: DriveParams) -> dict[str, float]:
@@ -60,6 +127,18 @@ def nearest_key(heading_rad: float, drive: DriveParams, keys: KeyState | None = 
     return min(table, key=lambda k: (abs(math.remainder(heading_rad - table[k], math.tau)), k))
 
 
+def threshold_key(heading_rad: float, arc_deg: float, spin_deg: float) -> str:
+    """The key a person choosing by the size of the wanted turn presses: straight below
+    ``arc_deg``, an arc up to ``spin_deg``, a turn in place beyond (robot frame, rad; left > 0)."""
+    turn = math.degrees(abs(math.remainder(heading_rad, math.tau)))
+    left = heading_rad > 0
+    if turn < arc_deg:
+        return "i"
+    if turn < spin_deg:
+        return "u" if left else "o"
+    return "j" if left else "l"
+
+
 class KeyboardPerson:
     """A :class:`~lfdfuse.sim.loop.GoalSource` pressing the key nearest to what ``teacher`` wants."""
 
@@ -75,10 +154,11 @@ class KeyboardPerson:
     ) -> None:
         if not (params.period_s > 0 and math.isfinite(params.period_s)):
             raise ValueError("the key period must be a positive number of seconds")
+        params.check()
         self.teacher, self.drive, self.dt_s, self.rng, self.p = teacher, drive, dt_s, rng, params
         self.state = keys
         self._headings = key_headings(keys, drive)
-        self._wants: deque[float] = deque(maxlen=max(1, round(params.reaction_s / dt_s)) + 1)
+        self._wants: deque[float] = deque(maxlen=round(params.reaction_s / dt_s) + 1)
         self._next_s = 0.0
         self.presses: list[tuple[int, Input, tuple[float, float]]] = []  # (tick, key, command) not yet logged
         self.count = 0
@@ -101,12 +181,38 @@ class KeyboardPerson:
                 self._press("k", obs.k)
             return self.state.command
         if t + 1e-9 >= self._next_s:
-            want = self._wants[0]
-            key = "k" if math.isnan(want) else self._nearest(want)
-            self._press(key, obs.k)
-            j = self.p.jitter
-            self._next_s = t + self.p.period_s * float(self.rng.uniform(1.0 - j, 1.0 + j))
+            self._next_s = t + self._decide(obs.k)
         return self.state.command
+
+    def _decide(self, k: int) -> float:
+        """Press (or, slipping, not yet) the key for what was wanted ``reaction_s`` ago; the time
+        until the next look."""
+        p = self.p
+        want = self._wants[0]
+        key = "k" if math.isnan(want) else self._choose(want)
+        extra = 0.0
+        if p.stop_go > 0 and key != "k" and float(self.rng.uniform()) < p.stop_go:
+            key, extra = "k", p.pause_s  # a stop, held a while, then drive on
+        elif p.lapse > 0 and float(self.rng.uniform()) < p.lapse:
+            if float(self.rng.uniform()) < 0.5:
+                # late: this press is missed; the old key is held until the next look
+                return p.period_s * float(self.rng.uniform(1.0 - p.jitter, 1.0 + p.jitter))
+            key = self._neighbour(key)
+        self._press(key, k)
+        return extra + p.period_s * float(self.rng.uniform(1.0 - p.jitter, 1.0 + p.jitter))
+
+    def _choose(self, heading: float) -> str:
+        if self.p.choice == "thresholds":
+            return threshold_key(heading, self.p.arc_deg, self.p.spin_deg)
+        return self._nearest(heading)
+
+    def _neighbour(self, key: str) -> str:
+        """A key beside ``key`` (the finger slips), or forward for a slipped stop."""
+        if key not in _SIDE_ORDER:
+            return "i"
+        i = _SIDE_ORDER.index(key)
+        options = [_SIDE_ORDER[j] for j in (i - 1, i + 1) if 0 <= j < len(_SIDE_ORDER)]
+        return options[int(self.rng.integers(len(options)))]
 
     def _nearest(self, heading: float) -> str:
         h = self._headings

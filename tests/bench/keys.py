@@ -11,6 +11,16 @@ the default (``auto``) command model, and the learned table drives the robot:
 
 Each row also gives the scripted teacher's result (no keys) for the same cell as the baseline.
 
+Then the zoo (``simulate --person NAME``, :data:`lfdfuse.sources.typist.PERSONS`): every person
+but ``steady`` (the ``--keys`` person above) teaches
+
+- ``zoo/three-goals/NAME``: the three-goal task, seeds :data:`ZOO_SEEDS`, each table run from
+  3 starts perturbed as ``execute --starts 3 --seed SEED`` draws them;
+- ``zoo/tee-branch/NAME``: keep-left and keep-right, seeds :data:`ZOO_SEEDS`, each table run
+  into both tee junctions: the branch taken must be the style's.
+
+The zoo's seeds were chosen before any zoo run and never tuned on.
+
     python -m tests.bench.run --suite keys
 """
 
@@ -26,18 +36,24 @@ import numpy as np
 
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
 from lfdfuse.execute.run import ExecuteOptions, run_table
+from lfdfuse.execute.starts import perturbed_starts
 from lfdfuse.network.table import FusionTable
 from lfdfuse.robot.pose import Pose
 from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.segment.read import read_segmented
 from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import Leg, load_task
+from lfdfuse.sources.typist import PERSONS
 from lfdfuse.world.model import load_world
 
 ROOT = Path(__file__).resolve().parents[2]
 TASK = ROOT / "sample_logs" / "three-goals.task.yaml"
 #: styles learned in one building and run in another: no target behaviours (tee has no targets)
 STYLE_BEHAVIORS = "avoid,wander_left,wander_right,wall_attract_left,wall_attract_right,sonar_avoid"
+#: the zoo's persons measured (``steady`` is the --keys person the rows above measure)
+ZOO = tuple(name for name in PERSONS if name != "steady")
+#: demo seeds of the zoo (and of its perturbed starts): fresh, never tuned on
+ZOO_SEEDS = (11, 12)
 
 #: (start, the branch a left-keeper takes, the test of the end pose for "went left")
 #: heading south down the west link into the wide lower corridor: left is east
@@ -63,12 +79,14 @@ def learn(
     keys: float | None,
     seed: int,
     folder: Path,
+    person: str | None = None,
     duration_s: float = 400.0,
     segment_kw: dict[str, Any] | None = None,
     estimate_kw: dict[str, Any] | None = None,
 ) -> FusionTable:
-    """Demonstrate ``legs`` (at a keyboard when ``keys``), segment, estimate: the learned table."""
-    tag = f"{world}-{'-'.join(f'{g.target}{g.style}' for g in legs)}-{keys}-{seed}"
+    """Demonstrate ``legs`` (at a keyboard when ``keys`` or ``person``, a name of the zoo), segment,
+    estimate: the learned table."""
+    tag = f"{world}-{'-'.join(f'{g.target}{g.style}' for g in legs)}-{keys}-{person}-{seed}"
     demo = folder / f"{tag}.mcap"
     simulate(
         SimulateOptions(
@@ -78,6 +96,8 @@ def learn(
             duration_s=duration_s,
             seed=seed,
             keys_period_s=keys,
+            person=None if person is None else PERSONS[person],
+            person_name=person or "custom",
         ),
         out=demo,
     )
@@ -94,6 +114,15 @@ def three_goal_starts(n: int, *, seed: int) -> list[tuple[float, float, float]]:
     return [
         (4.0 + rng.uniform(-1.0, 1.0), 1.2 + rng.uniform(-0.35, 0.35), rng.uniform(-0.35, 0.35))
         for _ in range(n)
+    ]
+
+
+def execute_starts(n: int, *, seed: int) -> list[tuple[float, float, float]]:
+    """The starts ``execute --starts n --seed seed`` drives from in ``building``."""
+    world = load_world("building")
+    return [
+        p.as_tuple()
+        for p in perturbed_starts(world, Pose(*world.start), n=n, rng=np.random.default_rng(seed))
     ]
 
 
@@ -175,6 +204,52 @@ def run(quick: bool = False) -> list[dict[str, Any]]:
                         "runs": total,
                     }
                 )
+        rows += zoo(ZOO, seeds=ZOO_SEEDS[:1] if quick else ZOO_SEEDS, folder=folder)
+    return rows
+
+
+def zoo_cell(person: str, seed: int, folder: Path) -> dict[str, Any]:
+    """One person and seed: the three-goal runs (completed each) and the tee runs (branch right each)."""
+    table = learn(load_task(str(TASK)), world="building", keys=None, person=person, seed=seed, folder=folder)
+    done = three_goals(
+        table, starts=execute_starts(3, seed=seed), folder=folder, label=f"zoo3g-{person}-{seed}"
+    )
+    tee: list[bool] = []
+    for style in ("keep-left", "keep-right"):
+        table = learn(
+            [Leg(None, style)],
+            world="building",
+            keys=None,
+            person=person,
+            seed=seed,
+            folder=folder,
+            duration_s=300.0,
+            segment_kw={"behaviors": STYLE_BEHAVIORS},
+        )
+        got = tee_branches(table, folder=folder, label=f"zootee-{style}-{person}-{seed}")
+        tee += [g is (style == "keep-left") for g in got]
+    return {"person": person, "seed": seed, "three_goals": done, "tee": tee}
+
+
+def zoo(persons: tuple[str, ...], *, seeds: tuple[int, ...], folder: Path) -> list[dict[str, Any]]:
+    """A row per person: three-goal completions and tee branches over ``seeds``, and a total."""
+    cells = [zoo_cell(p, s, folder) for p in persons for s in seeds]
+    return zoo_rows(cells)
+
+
+def zoo_rows(cells: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The rows of :func:`zoo` from its cells (one per person and seed)."""
+    rows: list[dict[str, Any]] = []
+    for kind in ("three_goals", "tee"):
+        name = "three-goals" if kind == "three_goals" else "tee-branch"
+        persons = list(dict.fromkeys(c["person"] for c in cells))
+        total = [0, 0]
+        for person in persons:
+            runs = [ok for c in cells if c["person"] == person for ok in c[kind]]
+            rows.append({"name": f"zoo/{name}/{person}", "completed": sum(runs), "runs": len(runs)})
+            total[0] += sum(runs)
+            total[1] += len(runs)
+        rows.append({"name": f"zoo/{name}/all", "completed": total[0], "runs": total[1]})
     return rows
 
 

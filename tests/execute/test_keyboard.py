@@ -5,7 +5,8 @@ every period, jittered, held); the demo is segmented and estimated with the comm
 defaults (``--lag auto``, ``--commands auto``: the discrete command model at the press lag) and
 the learned table drives. ``make bench`` (suite ``keys``) measures the same cases over more
 seeds; here the three-goal table learned at keys every 1.0 s (seed 1) must complete at least 2
-of 3 perturbed starts, and each style table must take its own branch at every tee.
+of 3 perturbed starts, and each style table must take its own branch at every tee; two persons
+of the zoo (``simulate --person``) teach the styles too.
 """
 
 from __future__ import annotations
@@ -43,3 +44,23 @@ def test_keyboard_taught_styles_take_their_branch_in_another_world(tmp_path: Pat
         )
         got = tee_branches(table, folder=tmp_path, label=style)
         assert got == [style == "keep-left"] * len(got), (style, got)
+
+
+def test_zoo_taught_styles_take_their_branch(tmp_path: Path) -> None:
+    """Two persons of the zoo other than ``--keys``'s own: a coarse one (a key every 1.2 s, chosen
+    by thresholds on the wanted turn) teaches keep-left, a prompt one (a key every 0.3 s, no
+    delay) keep-right; each learned table takes its own branch at both tees (``make bench`` runs
+    the whole zoo, where some persons do not yet teach every style)."""
+    for person, style in (("coarse", "keep-left"), ("prompt", "keep-right")):
+        table = learn(
+            [Leg(None, style)],
+            world="building",
+            keys=None,
+            person=person,
+            seed=11,
+            folder=tmp_path,
+            duration_s=300.0,
+            segment_kw={"behaviors": STYLE_BEHAVIORS},
+        )
+        got = tee_branches(table, folder=tmp_path, label=f"{person}-{style}")
+        assert got == [style == "keep-left"] * len(got), (person, style, got)

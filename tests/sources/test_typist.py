@@ -3,7 +3,11 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
 
 import numpy as np
 import orjson
@@ -11,10 +15,18 @@ import pytest
 from typer.testing import CliRunner
 
 from lfdfuse.cli.main import app
-from lfdfuse.control.command import DriveParams
+from lfdfuse.control.command import DriveParams, heading_to_command
 from lfdfuse.log.reader import file_info, iter_messages
 from lfdfuse.sources.teleop.keys import KeyState, press
-from lfdfuse.sources.typist import key_headings, nearest_key
+from lfdfuse.sources.typist import (
+    CHOICES,
+    PERSONS,
+    KeyboardParams,
+    KeyboardPerson,
+    key_headings,
+    nearest_key,
+    threshold_key,
+)
 from tests.conftest import ROOT
 
 runner = CliRunner()
@@ -87,3 +99,128 @@ def test_keys_with_a_network_teacher_is_a_clean_error(tmp_path: Path) -> None:
     )
     assert res.exit_code == 1
     assert res.output.strip().startswith("error:")
+
+
+class _Wants:
+    """A teacher wanting ``heading(k)`` (robot frame, rad) at tick k; never done."""
+
+    def __init__(self, heading: Callable[[int], float], drive: DriveParams) -> None:
+        self.heading, self.drive = heading, drive
+        self.done = False
+        self.reached: list[tuple[str, int]] = []
+
+    def command(self, obs: Any) -> tuple[float, float]:
+        v, w = heading_to_command(np.array(self.heading(obs.k)), self.drive)
+        return float(v), float(w)
+
+
+def _drive(person: KeyboardPerson, ticks: int) -> list[tuple[int, str]]:
+    """Every press ``(tick, key)`` of ``ticks`` control periods."""
+    out = []
+    for k in range(ticks):
+        person.command(SimpleNamespace(k=k))  # type: ignore[arg-type]
+        out += [(t, inp.text) for t, inp, _cmd in person.presses]
+        person.presses.clear()
+    return out
+
+
+def _person(heading: Callable[[int], float], params: KeyboardParams, seed: int = 0) -> KeyboardPerson:
+    drive = DriveParams()
+    return KeyboardPerson(
+        _Wants(heading, drive), drive=drive, dt_s=0.1, rng=np.random.default_rng(seed), params=params
+    )
+
+
+def test_the_zoo_spans_the_documented_ranges() -> None:
+    """Every named person is a valid model; together they span reaction 0–0.6 s, periods 0.3–1.5 s,
+    both ways of choosing a key, slips, stop-and-go and cut corners."""
+    assert len(PERSONS) >= 7 and PERSONS["steady"] == KeyboardParams()
+    for p in PERSONS.values():
+        p.check()
+        assert 0.0 <= p.reaction_s <= 0.6 and 0.3 <= p.period_s <= 1.5
+    ps = list(PERSONS.values())
+    assert min(p.reaction_s for p in ps) == 0.0 and max(p.reaction_s for p in ps) == 0.6
+    assert {p.choice for p in ps} == set(CHOICES)
+    assert any(p.lapse > 0 for p in ps) and any(p.stop_go > 0 for p in ps) and any(p.corner_m > 0 for p in ps)
+
+
+@pytest.mark.parametrize("name", ["prompt", "steady", "late"])
+def test_a_press_answers_what_was_wanted_reaction_ago(name: str) -> None:
+    """The wanted turn flips from hard left to hard right at tick 50: the first right key comes
+    ``reaction_s`` after the flip (at the first press after it), never earlier."""
+    params = replace(PERSONS[name], jitter=0.0, period_s=0.1)  # a look every tick
+    presses = _drive(_person(lambda k: 1.5 if k < 50 else -1.5, params), 80)
+    first_right = min(t for t, key in presses if key == "l")
+    assert first_right == 50 + round(params.reaction_s / 0.1), presses
+
+
+def test_thresholds_choose_by_the_size_of_the_turn() -> None:
+    for deg, key in [
+        (0, "i"),
+        (10, "i"),
+        (-29, "i"),
+        (31, "u"),
+        (-31, "o"),
+        (79, "u"),
+        (81, "j"),
+        (-170, "l"),
+    ]:
+        assert threshold_key(math.radians(deg), 30.0, 80.0) == key, deg
+    # a coarse person keeps straight where the nearest-heading person already arcs
+    assert nearest_key(math.radians(25), DriveParams()) == "u"
+    assert threshold_key(math.radians(25), 30.0, 80.0) == "i"
+
+
+def test_slips_press_wrong_keys_and_miss_presses() -> None:
+    """Wanting straight ahead: a careful person presses only ``i``; one slipping a third of the
+    time presses neighbours (``u``/``o``) and misses presses (fewer than one per look)."""
+    careful = _drive(_person(lambda k: 0.0, replace(KeyboardParams(), jitter=0.0)), 600)
+    sloppy = _drive(_person(lambda k: 0.0, replace(KeyboardParams(), jitter=0.0, lapse=0.33)), 600)
+    assert {key for _t, key in careful} == {"i"} and len(careful) == 120
+    wrong = sum(key in ("u", "o") for _t, key in sloppy)
+    assert {key for _t, key in sloppy} <= {"i", "u", "o"}
+    assert 8 <= wrong <= 40 and 85 <= len(sloppy) <= 112, (wrong, len(sloppy))
+
+
+def test_stop_and_go_stops_while_the_teacher_drives() -> None:
+    params = replace(KeyboardParams(), stop_go=0.2, pause_s=1.0)
+    presses = _drive(_person(lambda k: 0.3, params), 600)
+    stops = [t for t, key in presses if key == "k"]
+    assert 5 <= len(stops) <= 40, stops
+    # each stop is held for the pause (and the next look): no key within 1 s after a stop
+    nxt = {t: min((u for u, _k in presses if u > t), default=10**9) for t in stops}
+    assert all(nxt[t] - t >= 10 + round(0.5 * 0.6 * 10) for t in stops), nxt
+
+
+def test_simulate_person_is_recorded_and_steady_keys_are_not(tmp_path: Path) -> None:
+    task = str(ROOT / "sample_logs" / "three-goals.task.yaml")
+    base = ["simulate", "--world", "building", "--teacher", task, "--duration", "15", "--seed", "4"]
+    outs = {}
+    for name, extra in [
+        ("keys", ["--keys", "0.5"]),
+        ("sloppy", ["--person", "sloppy"]),
+        ("sloppy2", ["--person", "sloppy"]),
+        ("custom", ["--keys", "0.9", "--reaction", "0.4", "--thresholds", "25,70"]),
+    ]:
+        out = tmp_path / f"{name}.mcap"
+        res = runner.invoke(app, base + extra + ["-o", str(out)])
+        assert res.exit_code == 0, res.output
+        outs[name] = file_info(out).metadata["lfdfuse"]
+    assert "person" not in outs["keys"] and outs["keys"]["input"] == "keys:0.5"
+    assert outs["sloppy"]["person"] == "sloppy" and outs["sloppy"]["input"] == "keys:0.6"
+    assert "lapse=0.16" in outs["sloppy"]["person_model"]
+    assert (tmp_path / "sloppy.mcap").read_bytes() == (tmp_path / "sloppy2.mcap").read_bytes()
+    assert outs["custom"]["person"] == "custom" and outs["custom"]["input"] == "keys:0.9"
+    model = outs["custom"]["person_model"]
+    assert "choice='thresholds'" in model and "arc_deg=25.0" in model and "reaction_s=0.4" in model
+
+
+@pytest.mark.parametrize(
+    "extra",
+    [["--person", "nobody"], ["--thresholds", "70,20"], ["--thresholds", "x"], ["--choose", "best"]],
+)
+def test_a_bad_person_is_a_clean_error(tmp_path: Path, extra: list[str]) -> None:
+    res = runner.invoke(app, ["simulate", "--duration", "5", *extra, "-o", str(tmp_path / "x.mcap")])
+    assert res.exit_code == 1, res.output
+    assert res.output.strip().startswith("error:"), res.output
+    assert not (tmp_path / "x.mcap").exists()
