@@ -108,6 +108,9 @@ class FusionModel:
     lapse: float = 0.02
     recheck_s: float | None = 1.0  # a held command is decided again this often (None: only presses)
     nudge_s: float | None = 1.0  # a press undone within this long is a nudge (None: no nudges)
+    #: a discrete demo's rows: the prior centred on their step's weights, its strength learned
+    #: from the demo (:mod:`lfdfuse.estimate.hierarchy`); False: the flat Dirichlet(α)
+    hierarchy: bool = False
 
     @cached_property
     def kappas(self) -> np.ndarray:
