@@ -91,6 +91,9 @@ class EstimateOptions:
     pf: PFParams = field(default_factory=PFParams)  # paper: the published filter
     min_samples: int = 30  # rows with fewer informative steps are flagged low_samples
     commands: CommandMode = "auto"  # the command model: auto | continuous | discrete (DESIGN §6)
+    #: with ``commands`` auto, the command model and lapse chosen by cross-validated prediction
+    #: on the demo itself (:mod:`lfdfuse.estimate.person`)
+    select_model: bool = False
 
 
 @dataclass(frozen=True)

@@ -59,6 +59,13 @@ def estimate_runs(
         lag_s=runs[0].metadata.get("segment_lag_s"),
         bins=est.bins,
     )
+    if est.hierarchy is not None:  # a discrete demo's rows: the prior centred on their steps
+        by["prior"] = (
+            f"dirichlet({opts.model.alpha:g} + c·step weights), c = {est.hierarchy.spread:g}"
+            " by evidence over the rows"
+        )
+    if est.person is not None:  # the command model the demo chose by cross-validation
+        by["person_model"] = est.person.provenance()
     if len(runs) > 1:
         by["sources"] = list(names)
         by["source_commands"] = list(est.source_commands)  # each demo's own command model

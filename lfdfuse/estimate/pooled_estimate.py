@@ -27,9 +27,11 @@ from lfdfuse.estimate.demo_alignment import (
     problem_of,
     row_rng,
 )
-from lfdfuse.estimate.methods import EstimateOptions, RowEstimate, check_options, estimate_groups
+from lfdfuse.estimate.hierarchy import Hierarchy
+from lfdfuse.estimate.methods import EstimateOptions, Method, RowEstimate, check_options, estimate_groups
 from lfdfuse.estimate.model import CommandBins
-from lfdfuse.estimate.segments import estimate_segments, run_rng, step_names
+from lfdfuse.estimate.person import PersonChoice, choose_person_model
+from lfdfuse.estimate.segments import estimate_segments, fit_steps, run_rng, step_names
 from lfdfuse.network.table import FusionRow, Step
 from lfdfuse.progress import Progress, part, tell
 from lfdfuse.segment.read import SegmentedRun
@@ -47,6 +49,8 @@ class PooledSteps:
     commands: str  # the first demo's command model (continuous | discrete)
     bins: CommandBins | None  # its command set (discrete); every demo's rows observe their own
     source_commands: tuple[str, ...]  # every demo's command model, in order
+    hierarchy: Hierarchy | None = None  # the first demo's rows' prior, learned from its steps
+    person: PersonChoice | None = None  # the first demo's command model chosen by its data
 
 
 def _row(
@@ -114,6 +118,13 @@ def estimate_pooled(
     the discrete model's command set, when not the first demo's own.
     """
     check_options(opts)
+    chosen = None
+    if opts.select_model and opts.commands == "auto" and opts.method == Method.PF:
+        # the first demo chooses its person model, and every demo's rows are read by it
+        chosen = choose_person_model(runs[0], opts, fit_steps)
+    opts = replace(opts, select_model=False)
+    if chosen is not None:
+        opts = replace(opts, commands=chosen.mode, model=replace(opts.model, lapse=chosen.lapse))
     al = align(runs)
     # each demo keeps its command model: a discrete demo's rows see its decisions only, each
     # observing the heading interval of its own command set (``command_set``: the first demo's)
@@ -215,7 +226,16 @@ def estimate_pooled(
     )
     modes = tuple(m.mode for m in models)
     return PooledSteps(
-        steps, fits[0], len(groups), len(groups) - len(live), al, base.commands, base.bins, modes
+        steps,
+        fits[0],
+        len(groups),
+        len(groups) - len(live),
+        al,
+        base.commands,
+        base.bins,
+        modes,
+        base.hierarchy,
+        chosen,
     )
 
 

@@ -13,14 +13,24 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from functools import partial
 
 import numpy as np
 
 from lfdfuse.behaviors.spec import attract_target
 from lfdfuse.estimate.baselines import angle_errors
 from lfdfuse.estimate.commands import commands_of
-from lfdfuse.estimate.methods import EstimateOptions, Problem, check_options, estimate_groups
-from lfdfuse.estimate.model import CommandBins
+from lfdfuse.estimate.hierarchy import Hierarchy, centre_of, hierarchical_rows
+from lfdfuse.estimate.methods import (
+    EstimateOptions,
+    Method,
+    Problem,
+    RowEstimate,
+    check_options,
+    estimate_groups,
+)
+from lfdfuse.estimate.model import CommandBins, make_row, row_loglik
+from lfdfuse.estimate.person import PersonChoice, choose_person_model
 from lfdfuse.network.table import FusionRow, Step
 from lfdfuse.progress import Progress
 from lfdfuse.segment.read import SegmentedRun
@@ -97,6 +107,8 @@ class SegmentSteps:
     skipped: int  # groups with no informative step
     commands: str  # the command model the rows were estimated with: continuous | discrete
     bins: CommandBins | None  # its command set (discrete)
+    hierarchy: Hierarchy | None = None  # the rows' prior learned from their steps (discrete, pf)
+    person: PersonChoice | None = None  # the command model the demo chose (``select_model``)
 
 
 def estimate_segments(
@@ -114,6 +126,11 @@ def estimate_segments(
     is told how far the pass is, many times over a long one. ``command_set``: the discrete
     model's command set, when not the run's own (:func:`~lfdfuse.estimate.commands.commands_of`)."""
     check_options(opts)
+    chosen = None
+    if opts.select_model and opts.commands == "auto" and opts.method == Method.PF:
+        chosen = choose_person_model(run, opts, fit_steps)
+        if chosen is not None:
+            opts = replace(opts, commands=chosen.mode, model=replace(opts.model, lapse=chosen.lapse))
     cm = commands_of(
         run,
         requested=opts.commands,
@@ -151,6 +168,9 @@ def estimate_segments(
         Problem(run.vectors[s][:, idx, :], run.demo[s], None if bounds is None else bounds[s]) for s in uniq
     ]
     est = estimate_groups(problems, opts=opts, rng=rng, bins=cm.bins, progress=progress)
+    spread: Hierarchy | None = None
+    if opts.model.hierarchy and cm.mode == "discrete" and opts.method == Method.PF and live:
+        est, spread = _borrow_from_steps(run, live, est, problems, opts, rng, cm.bins, bounds)
     rows: dict[int, list[FusionRow]] = {s.index: [] for s in run.segments}
     for g, e, (vec, demo, *_) in zip(live, est, problems, strict=False):
         err = float(np.degrees(angle_errors(vec, demo, e.weights).mean()))
@@ -192,7 +212,54 @@ def estimate_segments(
         len(groups) - len(live),
         cm.mode,
         cm.bins,
+        spread,
+        chosen,
     )
+
+
+def _borrow_from_steps(
+    run: SegmentedRun,
+    live: list[Group],
+    est: list[RowEstimate],
+    row_problems: list[Problem],
+    opts: EstimateOptions,
+    rng: np.random.Generator,
+    bins: CommandBins | None,
+    bounds: np.ndarray | None,
+) -> tuple[list[RowEstimate], Hierarchy]:
+    """The rows' estimates under the hierarchical prior (:mod:`lfdfuse.estimate.hierarchy`):
+    each goal segment's weights fitted on all its decisions (a behaviour's vector only where it
+    applies), the prior's strength chosen over the rows, the rows reweighted. ``est`` holds the
+    rows' flat estimates first (then the default fits, returned unchanged)."""
+    k = len(run.names)
+    segs = sorted({g.segment for g in live})
+    problems = []
+    members = []
+    for s in segs:
+        steps = np.nonzero((run.segment_of == s) & run.informative & run.applicable.any(axis=1))[0]
+        beh = [i for i in range(k) if run.applicable[steps, i].any()]
+        vec = run.vectors[steps][:, beh, :] * run.applicable[steps][:, beh, None]
+        problems.append(Problem(vec, run.demo[steps], None if bounds is None else bounds[steps]))
+        members.append(beh)
+    fits = estimate_groups(problems, opts=replace(opts, trials=1), rng=rng, bins=bins)
+    step_w = {}
+    for s, beh, f in zip(segs, members, fits, strict=True):
+        w = np.zeros(k)
+        w[beh] = f.weights
+        step_w[s] = w
+    centres = [centre_of(step_w[g.segment], g.behaviors) for g in live]
+    draw = np.random.default_rng([opts.seed, len(run.t_ns), 1])
+    logliks = [
+        partial(row_loglik, make_row(p.vectors, p.demo, bins, p.bounds), model=opts.model)
+        for p in row_problems
+    ]
+    out, h = hierarchical_rows(est[: len(live)], centres, logliks[: len(live)], opts.model.alpha, draw)
+    return out + list(est[len(live) :]), h
+
+
+def fit_steps(run: SegmentedRun, opts: EstimateOptions) -> tuple[Step, ...]:
+    """The network steps of ``run`` alone (no table default): a candidate person model's fit."""
+    return estimate_segments(run, opts=opts, rng=run_rng(run, opts), table_default=False).steps
 
 
 def run_rng(run: SegmentedRun, opts: EstimateOptions) -> np.random.Generator:
