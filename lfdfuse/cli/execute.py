@@ -25,6 +25,7 @@ from lfdfuse.cli.render import print_report
 from lfdfuse.execute.report import write_report
 from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.execute.starts import StartsOptions
+from lfdfuse.network.stepper import check_table_world
 from lfdfuse.network.table import load_table
 from lfdfuse.robot.pose import Pose
 from lfdfuse.world.model import DEFAULT_WORLD, load_world
@@ -93,6 +94,7 @@ def execute_cmd(
         raise typer.BadParameter("--workers and --scheduler run many starts: give --starts too")
     w = load_world(world)
     tab = load_table(table)
+    check_table_world(tab, w)  # a target the network steers to must exist: that is an error, said first
     unreachable = [g for g in dict.fromkeys(tab.goals()) if g not in w.target_names]
     if unreachable:
         err_console.print(

@@ -96,7 +96,7 @@ def inspect(
         net = seg.metadata.get("segment_network_ticks")
         if net is not None:  # a correction log: only the person's ticks teach
             console.print(f"  correction log: {net} tick(s) the network drove are not informative")
-        print_segments(segmentation_of(seg), seg.names, seg.t_ns)
+        print_segments(segmentation_of(seg), seg.names, seg.t_ns.tolist())
 
 
 def _stamp(t_ns: int) -> str:

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
-import numpy as np
 from rich.table import Table
 
 from lfdfuse.behaviors.names import abbreviation, legend_entry
@@ -29,7 +29,7 @@ def print_run(summary: RunSummary, *, title: str) -> None:
     )
 
 
-def print_segments(segm: Segmentation, names: tuple[str, ...], t_ns: np.ndarray) -> None:
+def print_segments(segm: Segmentation, names: tuple[str, ...], t_ns: Sequence[int]) -> None:
     """Each goal segment: its goal, how long it lasted (from its first step to the next segment's,
     or to the demo's last step: the durations add up to the demo's), its steps and BACs."""
     for seg in segm.segments:

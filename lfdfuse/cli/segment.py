@@ -72,7 +72,7 @@ def segment_cmd(
             f"  command lag: {best.lag_s:+.1f} s explains the demo best "
             f"(per-BAC least-squares heading error {best.heading_error_deg:.1f}°{now})"
         )
-    print_segments(res.segmentation, res.names, res.t_ns)
+    print_segments(res.segmentation, res.names, res.t_ns.tolist())
 
 
 def parse_lag(text: str) -> float | None:

@@ -140,7 +140,7 @@ def simulate_cmd(
       lfdfuse simulate --teacher fusion.yaml --heading-noise 5 -o truth.mcap
       lfdfuse simulate --teacher task.yaml --keys 0.5 -o keys.mcap
       lfdfuse simulate --teacher task.yaml --person sloppy -o sloppy.mcap
-      lfdfuse simulate --teacher task.yaml --person late --keys 1.0 --lapse 0.1 -o mine.mcap
+      lfdfuse simulate --teacher task.yaml --person late --lapse 0.1 -o mine.mcap
     """
     check_outputs([out], [existing(world), existing(teacher)])
     w = load_world(world)

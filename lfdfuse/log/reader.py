@@ -134,8 +134,9 @@ def _open(path: str | Path) -> Any:
     if size < 2 * len(MCAP_MAGIC) or stream.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
         stream.close()
         raise LogError(
-            f"{p}: truncated MCAP file: it ends at byte {size} without the closing magic bytes (cut short"
-            " while written or copied): copy it again, or keep its readable part with `mcap recover`"
+            f"{p}: not a readable MCAP file (truncated MCAP file: it ends at byte {size} without the closing"
+            " magic bytes, cut short while written or copied): copy it again, or keep its readable part"
+            " with `mcap recover`"
         )
     stream.seek(len(MCAP_MAGIC))
     try:

@@ -113,10 +113,10 @@ def test_world_errors_name_the_key_or_problem(text: str, message: str) -> None:
 
 
 def test_start_in_the_wrong_format_and_negative_noise_are_clear_errors(tmp_path: Path) -> None:
-    """A pose only the library can read is one error line (exit 1); a number out of the range
-    ``--help`` shows is a usage error naming the option (exit 2)."""
+    """A pose in the wrong format, or a number out of the range ``--help`` shows, is a usage error
+    naming the option (exit 2), before anything is written."""
     for args, message, code in (
-        (["--start", "1 2 0"], "X,Y,THETA", 1),
+        (["--start", "1 2 0"], "--start", 2),
         (["--sensor-noise", "-0.1"], "--sensor-noise", 2),
         (["--heading-noise", "inf"], "--heading-noise", 2),
         (["--duration", "1e12"], "--duration", 2),
