@@ -1,0 +1,97 @@
+"""Compiled kernels: numba where it imports and compiles, the numpy reference everywhere else.
+
+A hot loop is written twice: the numpy reference (vectorised, what the tests trust) and a plain
+loop for numba. :func:`kernel` wraps the loop; nothing is imported or compiled until the first
+:meth:`Kernel.ready`, so ``lfdfuse --help`` and ``inspect`` never pay for numba. Compiled code is
+cached on disk (numba's ``cache=True``: beside the module, or in the user's cache folder when
+that is not writable), so only the first run after an install compiles.
+
+``LFDFUSE_KERNELS=numpy`` runs every reference instead (the tests compare the two; the
+benchmarks time both in one run). When numba is missing or a kernel fails to compile, the
+reference runs and one warning says so.
+
+>>> import os
+>>> double = kernel(lambda x: 2.0 * x)
+>>> os.environ[MODE] = "numpy"
+>>> double.ready()
+False
+>>> del os.environ[MODE]
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from collections.abc import Callable
+from typing import Any
+
+#: environment variable choosing the kernels: ``numba`` (the default) or ``numpy``
+MODE = "LFDFUSE_KERNELS"
+
+_numba: dict[str, Any] = {}
+
+
+def compiled_wanted() -> bool:
+    """True unless ``LFDFUSE_KERNELS=numpy`` asks for the numpy references."""
+    return os.environ.get(MODE, "numba").strip().lower() != "numpy"
+
+
+def _import_numba() -> Any:
+    """The numba module, imported once; None (with one warning) when it cannot be."""
+    if "module" not in _numba:
+        try:
+            import numba
+        except Exception as exc:  # an ImportError, or llvmlite failing to load on this platform
+            _numba["module"] = None
+            warnings.warn(
+                f"compiled kernels unavailable ({exc}); running the numpy references", RuntimeWarning, 2
+            )
+        else:
+            _numba["module"] = numba
+    return _numba["module"]
+
+
+class Kernel:
+    """A loop compiled by numba on first use, or None of it when it cannot be (see :meth:`ready`)."""
+
+    def __init__(self, fn: Callable[..., Any], *, signature: str | None = None) -> None:
+        self.fn = fn
+        self.signature = signature
+        self._compiled: Callable[..., Any] | None = None
+        self._failed = False
+
+    def ready(self) -> bool:
+        """True when the compiled loop can run: compiled kernels are wanted, numba imports and
+        this loop compiles (eagerly when it has a signature). False means: run the reference."""
+        if not compiled_wanted() or self._failed:
+            return False
+        if self._compiled is not None:
+            return True
+        numba = _import_numba()
+        if numba is None:
+            self._failed = True
+            return False
+        try:
+            jit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
+            self._compiled = jit(self.signature)(self.fn) if self.signature else jit(self.fn)
+        except Exception as exc:  # a typing error on this platform's numba: the reference still runs
+            self._failed = True
+            name = getattr(self.fn, "__name__", "kernel")
+            warnings.warn(
+                f"kernel {name} did not compile ({exc}); running its numpy reference", RuntimeWarning, 2
+            )
+            return False
+        return True
+
+    def __call__(self, *args: Any) -> Any:
+        if self._compiled is None and not self.ready():
+            raise RuntimeError("compiled kernel called without ready(): call its numpy reference instead")
+        assert self._compiled is not None
+        return self._compiled(*args)
+
+
+def kernel(fn: Callable[..., Any] | None = None, *, signature: str | None = None) -> Any:
+    """Decorate a numba-compatible loop as a lazily compiled :class:`Kernel`."""
+    if fn is None:
+        return lambda f: Kernel(f, signature=signature)
+    return Kernel(fn, signature=signature)
