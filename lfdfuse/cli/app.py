@@ -8,12 +8,46 @@ from pathlib import Path
 from typing import Any
 
 import typer
-from typer.core import TyperArgument, TyperCommand
+from typer.core import TyperArgument, TyperCommand, TyperGroup
 
 from lfdfuse import __version__
+from lfdfuse.cli.common import MAX_SEED
+
+
+def _tidy(params: list[Any]) -> list[Any]:  # typer's parameter classes are a vendored click: Any
+    """Parameters as their help should show them at 80 columns: a flag with nothing after its
+    name, an argument by its NAME (with ``...`` when it takes several), a choice as
+    ``<a | b | c>`` (so a narrow column wraps between choices, never inside one), and a seed's
+    range without its 19-digit top."""
+    for p in params:
+        desc = getattr(p, "type_descriptor", None)
+        if getattr(p, "is_flag", False):
+            p.metavar = ""  # a flag takes no value: nothing to show after its name
+        elif isinstance(p, TyperArgument):
+            arg: Any = p  # narrowed to typer's class, whose display method is replaced below
+            if arg.metavar is None and arg.name:
+                arg.metavar = arg.name.upper()
+            if arg.nargs != 1:
+                arg.metavar = (arg.metavar or "").removesuffix("...") + "..."
+                kind = "path" if "Path" in arg.bare_type() else "value"
+                arg.display_type_rich = lambda ctx, kind=kind: f"<{kind}>..."
+        elif desc is not None and desc.is_choice and p.metavar is None:
+            p.metavar = "<" + " | ".join(str(getattr(c, "value", c)) for c in desc.choices or ()) + ">"
+        if getattr(p, "max", None) == MAX_SEED:
+            p._get_number_range_help_str = lambda low=p.min: f"x>={low}"
+    return params
+
+
+class Group(TyperGroup):
+    """The root command, its options shown as the commands' are (:func:`_tidy`)."""
+
+    def get_params(self, ctx: Any) -> list[Any]:
+        return _tidy(super().get_params(ctx))
+
 
 app = typer.Typer(
     name="lfdfuse",
+    cls=Group,
     help="Learn behaviour fusion from one demonstration: simulate | segment | estimate | execute.",
     no_args_is_help=True,
     add_completion=False,
@@ -61,23 +95,17 @@ def help_text(doc: str) -> str:
 
 
 class Command(TyperCommand):
-    """A command whose help shows arguments as SRC (not ``{src}``) and flags without ``<bool>``."""
+    """A command whose help shows its parameters as :func:`_tidy` says."""
 
     # typer's context and parameter classes are its own (a vendored click): typed as Any here
     def get_params(self, ctx: Any) -> list[Any]:
-        params = super().get_params(ctx)
-        for p in params:
-            if getattr(p, "is_flag", False):
-                p.metavar = ""  # a flag takes no value: nothing to show after its name
-            elif isinstance(p, TyperArgument) and p.metavar is None and p.name:
-                p.metavar = p.name.upper()
-        return params
+        return _tidy(super().get_params(ctx))
 
     def collect_usage_pieces(self, ctx: Any) -> list[str]:
         pieces = [self.options_metavar] if self.options_metavar else []
         for p in self.get_params(ctx):
             if isinstance(p, TyperArgument):
-                name = (p.metavar or p.name or "") + ("..." if p.nargs != 1 else "")
+                name = p.metavar or p.name or ""
                 pieces.append(name if p.required else f"[{name}]")
         return pieces
 

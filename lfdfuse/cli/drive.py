@@ -28,7 +28,7 @@ def drive_cmd(
     odom: str = typer.Option(
         "/odom", "--odom", help="Odometry topic (else the first odometry-like channel, e.g. /pose)."
     ),
-    cmd: str = typer.Option("/cmd_vel", "--cmd", help="Velocity command topic (geometry_msgs/msg/Twist)."),
+    cmd: str = typer.Option("/cmd_vel", "--cmd", help="Velocity command topic (a geometry_msgs Twist)."),
     shadow: bool = typer.Option(
         False,
         "--shadow",

@@ -43,6 +43,20 @@ def test_help_reads_cleanly(name: str, width: int) -> None:
     lines = out.splitlines()
     assert all(len(ln) <= width for ln in lines), f"{name}: a line wider than {width}"
     assert "<bool>" not in out, f"{name}: a flag shown with a <bool> placeholder"
+    assert "<list[" not in out and "......" not in out, f"{name}: a list shown as a Python type"
+    assert not re.search(r"\w…", out), f"{name} at {width}: a word cut short by an ellipsis"
+    # a choice or a range is read whole: never wrapped inside a word or a number
+    cmd = typer.main.get_group(app).commands[name]
+    for p in cmd.params:
+        desc = getattr(p, "type_descriptor", None)
+        for choice in (desc.choices or ()) if desc is not None and desc.is_choice else ():
+            word = str(getattr(choice, "value", choice))
+            assert re.search(rf"[<| ]{re.escape(word)}[ |>]", out), f"{name} at {width}: choice {word} cut"
+        for bound in (getattr(p, "min", None), getattr(p, "max", None)):
+            if isinstance(bound, int | float) and not isinstance(bound, bool) and abs(bound) < 1e6:
+                assert re.search(rf"(?<![\d.]){re.escape(str(bound))}(?![\d.])", out), (
+                    f"{name} at {width}: {p.name}'s bound {bound} cut"
+                )
     assert not re.search(r"\{[a-z_]+\}", out), f"{name}: an argument shown as {{name}}"
     # every example on one line, whole (a user copies it)
     examples = _examples(name)
@@ -72,5 +86,6 @@ def test_each_default_is_stated_once(name: str) -> None:
 def test_the_root_help_lists_every_command() -> None:
     for width in WIDTHS:
         out = _help([], width)
+        assert "<bool>" not in out, f"lfdfuse --help at {width}: a flag shown with a <bool> placeholder"
         for name in COMMANDS:
             assert re.search(rf"│ {name}\s", out), f"{name} missing from lfdfuse --help at {width}"
