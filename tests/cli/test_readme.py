@@ -274,3 +274,20 @@ def test_every_readme_command_works_as_written(tmp_path: Path, chain: list[str])
         if m.group(1) != claim.number:
             wrong.append(f"README: {claim.quote!r}; {claim.command} printed {m.group(0)!r}")
     assert not wrong, "\n".join(wrong)
+
+
+def test_the_readme_script_drives_without_a_collision(tmp_path: Path) -> None:
+    """The scripted-teleop example, run as the README shows it, drives the default world cleanly."""
+    from typer.testing import CliRunner
+
+    from lfdfuse.cli.main import app
+
+    text = README.read_text()
+    block = re.search(r"\*\*Scripted\*\*.*?```yaml\n(.*?)```", text, re.S)
+    assert block, "the README lost its scripted-teleop example"
+    script = tmp_path / "drive.yaml"
+    script.write_text(block.group(1))
+    out = tmp_path / "d.mcap"
+    res = CliRunner().invoke(app, ["teleop", "--input", "script", "--script", str(script), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert re.search(r"collisions\s+0\b", res.output), res.output
