@@ -332,6 +332,11 @@ def reading(ev: Evaluation) -> list[str]:
         )
     if not ev.turning_steps:
         lines.append("no held-out step turned (≥ 10° off ahead): there is no turn score.")
+    if ev.keys is not None:
+        lines.append(
+            "a person at a keyboard: each fitted method's prediction is read as the key the person"
+            " would press (its heading: the key whose bin holds the fused heading)."
+        )
     gap = m["fused"] - m["oracle"]
     lines.append(
         f"fused is {gap:.1f}° above the oracle (the best fusion of these primitives on the held-out steps)."
