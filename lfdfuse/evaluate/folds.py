@@ -16,7 +16,10 @@ it), with a bootstrap interval over those steps; the mean of each fold's steps i
 it (``fold_errors_deg``), their spread is what the printed ``± folds`` says. The methods are
 :mod:`lfdfuse.evaluate.holdout`'s, read the same way per fold (the oracle fitted on the fold
 itself, in the command set of the whole demo), plus ``bc``: behaviour cloning from the scan's
-sector ranges (:mod:`lfdfuse.evaluate.cloning`), fitted on the same training steps.
+sector ranges (:mod:`lfdfuse.evaluate.cloning`), fitted on the same training steps. On a
+discrete demo every fitted method's prediction (``bc``'s too) is read as a key press, its key
+response fitted on the decisions of the steps it was fitted on (a fold's training steps; the
+oracle's, the fold's own).
 
 A demo with fewer than :data:`MIN_DECISIONS` informative decisions is not scored: a one-line
 :class:`~lfdfuse.errors.ConfigError` says how many it has.
@@ -31,6 +34,7 @@ import numpy as np
 
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.commands import Commands, commands_of
+from lfdfuse.estimate.keys import fit_key_response, key_heading
 from lfdfuse.estimate.pipeline import EstimateOptions, Method, estimate_run
 from lfdfuse.evaluate.cloning import clone_headings
 from lfdfuse.evaluate.holdout import (
@@ -39,8 +43,8 @@ from lfdfuse.evaluate.holdout import (
     MethodScore,
     _score,
     _wrap,
-    bin_of,
     command_of,
+    keys_provenance,
     predict,
 )
 from lfdfuse.progress import Progress
@@ -121,6 +125,7 @@ def evaluate_folds(
     actual: list[np.ndarray] = []
     demos: list[np.ndarray] = []
     train_sizes: list[int] = []
+    responses: list[dict[str, object]] = []  # discrete: fused's key response of every fold
     for j, (a, b) in enumerate(ranges):
         fold = np.zeros(n, dtype=bool)
         fold[a:b] = True
@@ -143,8 +148,15 @@ def evaluate_folds(
             except ConfigError as exc:
                 raise ConfigError(f"fold {j + 1} of {folds} (steps {a}–{b - 1}), {name}: {exc}") from exc
             predictions[name] = predict(table, run, test_steps)
-            if cm.bins is not None:
-                chosen[name].append(bin_of(cm.bins, predict(table, run, decided)))
+            if cm.bins is not None and cm.decisions is not None and truth is not None:
+                # a person at a keyboard: the key the fit predicts (its training decisions fit
+                # the key response) and the heading of the key whose bin holds the prediction
+                seen = np.nonzero(cm.decisions & part.informative)[0]
+                response = fit_key_response(cm.bins, predict(table, run, seen), truth[seen], base.model)
+                chosen[name].append(response.key(predict(table, run, decided), base.model))
+                predictions[name] = key_heading(cm.bins, predictions[name])
+                if name == "fused":
+                    responses.append(response.provenance())
         predictions["straight"] = np.zeros(len(test_steps))
         where = np.searchsorted(all_inf, test_steps, side="left") - 1
         predictions["previous"] = np.where(where >= 0, headings[np.clip(where, 0, None)], 0.0)
@@ -152,10 +164,14 @@ def evaluate_folds(
             rows = np.nonzero(train.informative)[0]
             h_train = np.arctan2(run.demo[rows, 1], run.demo[rows, 0])
             predictions["bc"] = clone_headings(features[rows], h_train, features[test_steps])
-            if cm.bins is not None:
+            if cm.bins is not None and cm.decisions is not None and truth is not None:
+                seen = np.nonzero(cm.decisions & train.informative)[0]
+                at_seen = clone_headings(features[rows], h_train, features[seen])
+                response = fit_key_response(cm.bins, at_seen, truth[seen], base.model)
                 chosen["bc"].append(
-                    bin_of(cm.bins, clone_headings(features[rows], h_train, features[decided]))
+                    response.key(clone_headings(features[rows], h_train, features[decided]), base.model)
                 )
+                predictions["bc"] = key_heading(cm.bins, predictions["bc"])
         for m in names:
             errors[m].append(_wrap(predictions[m] - demo))
         if cm.bins is not None and cm.decisions is not None and truth is not None:
@@ -192,6 +208,7 @@ def evaluate_folds(
         split="kfold",
         folds=folds,
         informative_decisions=len(units),
+        keys=None if cm.bins is None else keys_provenance(responses),
     )
 
 

@@ -13,11 +13,17 @@ heading is reported per method, with a bootstrap interval:
   decisions in the command set of the whole demo (the person's keyboard), as the scores do: a
   held-out part holding one command would otherwise be one bin, which every heading is in.
 
-For a demo of the discrete command model (a person at a keyboard, DESIGN §6) the held-out
-*decisions* (:func:`~lfdfuse.estimate.commands.decision_steps`) are scored too: a method
-predicts the command whose bin holds its predicted heading, ``straight`` always the most common
-command of the training decisions, ``previous`` the command held before the decision; a stop or
-a reverse is a command no fusion predicts. ``command_accuracy`` is the share predicted right.
+For a demo of the discrete command model (a person at a keyboard, DESIGN §6) a fitted
+method's prediction is read as the person's key press (:mod:`lfdfuse.estimate.keys`): its
+heading is the heading of the key whose bin holds the fused heading (the model's median
+prediction: a person holding 'forward' is predicted forward, not at the fused vector's few
+degrees off), and the held-out *decisions* (:func:`~lfdfuse.estimate.commands.decision_steps`)
+are scored too: a fitted method predicts the most probable key given its fused heading, by a
+key response (how often the person pressed each key, and how noisily about the fused heading)
+fitted on the decisions the method was fitted on; ``straight`` always the most common command of
+the training decisions, ``previous`` the command held before the decision; a stop or a reverse
+is a command no fusion predicts. ``command_accuracy`` is the share predicted right; fused's key
+response of every fit is in ``keys``.
 
 Predictions use the weights the runtime would use (DESIGN §8): the step's row for the BAC, else
 the step's default weights, else the table's; a held-out goal segment that training never
@@ -34,6 +40,7 @@ import numpy as np
 
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.commands import commands_of
+from lfdfuse.estimate.keys import fit_key_response, key_heading, key_of
 from lfdfuse.estimate.methods import POINT_FITS
 from lfdfuse.estimate.model import CommandBins
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
@@ -90,6 +97,8 @@ class Evaluation:
     split: str = "holdout"
     folds: int | None = None
     informative_decisions: int | None = None  # k-fold: the decisions the folds were cut over
+    #: discrete logs: how the fits' predictions were read as keys, with fused's key response per fit
+    keys: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -110,6 +119,7 @@ class Evaluation:
                     "informative_decisions": self.informative_decisions,
                 }
             ),
+            **({} if self.keys is None else {"keys": self.keys}),
             "methods": {
                 name: {
                     "heading_error_deg": round(s.heading_error_deg, 3),
@@ -232,6 +242,8 @@ def evaluate(
     fits.append(("oracle", test, base))
     decided = np.zeros(0, dtype=np.int64) if cm.decisions is None else np.nonzero(cm.decisions[cut:])[0]
     chosen: dict[str, np.ndarray] = {}
+    truth = None if cm.bins is None else command_of(cm.bins, run)
+    responses: list[dict[str, object]] = []
     for k, (name, part, eo) in enumerate(fits):
         sub = share(progress, start=float(k), size=1.0, total=len(fits) + 1.0)
         # the oracle reads the held-out decisions in the person's command set (the whole demo's),
@@ -239,10 +251,20 @@ def evaluate(
         # would have one bin, every decision in it, and the oracle would be the prior
         keyboard = cm.bins if part is test else None
         table, _, _ = estimate_run(part, opts=eo, name=name, progress=sub, command_set=keyboard)
-        predictions[name] = predict(table, test, test_steps, segment_offset=offset if part is test else 0)
-        if cm.bins is not None:
-            at = predict(table, test, decided, segment_offset=offset if part is test else 0)
-            chosen[name] = bin_of(cm.bins, at)
+        off = offset if part is test else 0
+        predictions[name] = predict(table, test, test_steps, segment_offset=off)
+        if cm.bins is not None and cm.decisions is not None and truth is not None:
+            # a person at a keyboard: the key the fit predicts (its own decisions fit the key
+            # response) and the heading of the key whose bin holds the prediction
+            part_truth = truth[:cut] if part is train else truth[cut:]
+            part_dec = cm.decisions[:cut] if part is train else cm.decisions[cut:]
+            seen = np.nonzero(part_dec & part.informative)[0]
+            at_seen = predict(table, part, seen, segment_offset=off)
+            response = fit_key_response(cm.bins, at_seen, part_truth[seen], base.model)
+            chosen[name] = response.key(predict(table, test, decided, segment_offset=off), base.model)
+            predictions[name] = key_heading(cm.bins, predictions[name])
+            if name == "fused":
+                responses.append(response.provenance())
     predictions["straight"] = np.zeros(len(test_steps))
     # the last demonstrated heading before each held-out step (informative ones only)
     all_inf = np.nonzero(run.informative)[0]
@@ -252,8 +274,7 @@ def evaluate(
     rng = np.random.default_rng(seed)
     turning = np.abs(demo) >= TURN_RAD
     scores = {name: _score(_wrap(predictions[name] - demo), turning, rng) for name in METHODS}
-    if cm.bins is not None and cm.decisions is not None:
-        truth = command_of(cm.bins, run)
+    if cm.bins is not None and cm.decisions is not None and truth is not None:
         train_d = truth[:cut][cm.decisions[:cut]]
         values, counts = np.unique(train_d, return_counts=True)
         chosen["straight"] = np.full(len(decided), values[int(np.argmax(counts))] if len(values) else -1)
@@ -274,13 +295,24 @@ def evaluate(
         commands=cm.mode,
         test_decisions=None if cm.decisions is None else len(decided),
         held_out_headings=len(np.unique(np.round(np.degrees(demo), 1))),
+        keys=None if cm.bins is None else keys_provenance(responses),
     )
 
 
 def bin_of(bins: CommandBins, heading: np.ndarray) -> np.ndarray:
     """The command whose bin holds each heading (rad): the one a person would press."""
-    e = bins.edges
-    return np.clip(np.searchsorted(e, _wrap(heading), side="right") - 1, 0, bins.size - 1)
+    return key_of(bins, heading)
+
+
+def keys_provenance(responses: list[dict[str, object]]) -> dict[str, Any]:
+    """How a discrete log's predictions were read (:mod:`lfdfuse.estimate.keys`), and fused's key
+    response fitted on each fit's training decisions."""
+    return {
+        "heading": "the heading of the key whose bin holds the predicted heading",
+        "command": "the most probable key given the predicted heading: key shares and noise σ"
+        " fitted on the training decisions",
+        "fused": responses,
+    }
 
 
 def command_of(bins: CommandBins, run: SegmentedRun) -> np.ndarray:
@@ -300,6 +332,11 @@ def reading(ev: Evaluation) -> list[str]:
         )
     if not ev.turning_steps:
         lines.append("no held-out step turned (≥ 10° off ahead): there is no turn score.")
+    if ev.keys is not None:
+        lines.append(
+            "a person at a keyboard: each fitted method's prediction is read as the key the person"
+            " would press (its heading: the key whose bin holds the fused heading)."
+        )
     gap = m["fused"] - m["oracle"]
     lines.append(
         f"fused is {gap:.1f}° above the oracle (the best fusion of these primitives on the held-out steps)."
