@@ -202,3 +202,41 @@ def test_a_twist_stamped_robot_gets_twist_stamped(keep_left: Path) -> None:
     k = next(i for i, t in enumerate(stamps) if t < 10**15)
     assert 1 <= k <= 5 and all(t > 10**18 for t in stamps[:k])
     assert stamps[k:] == sorted(stamps[k:]) and stamps[-1] <= 5_100_000_000
+
+
+@pytest.mark.skipif(EXE is None, reason="the lfdfuse command is not installed")
+def test_shadow_watches_what_drives_the_teleop_robot_on_one_machine(keep_left: Path, tmp_path: Path) -> None:
+    """``teleop --input foxglove`` streams the command driving its robot on /cmd_vel, as a robot's
+    bridge does: one ``drive`` drives it, a second ``drive --shadow`` with the same table watches
+    and agrees with what it sees (both are the same network on nearly the same scans)."""
+    assert EXE is not None
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    teleop = subprocess.Popen(
+        [EXE, "teleop", "--input", "foxglove", "--port", "0", "--world", "tee", "--duration", "30"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        cwd=tmp_path,
+    )
+    try:
+        assert teleop.stdout is not None
+        url = ""
+        while not url:
+            line = teleop.stdout.readline()
+            assert line, teleop.stderr.read() if teleop.stderr else ""
+            m = re.search(r"ws://[\d.]+:\d+", line)
+            url = m.group(0) if m else ""
+        table = load_table(keep_left)
+        driver = start_drive(table, url, odom_topic="/pose")
+        watcher = start_drive(table, url, odom_topic="/pose", shadow=True)
+        time.sleep(4.0)
+        for live in (watcher, driver):
+            live.stopper.stop("test done")
+        seen, drove = watcher.join(), driver.join()
+    finally:
+        teleop.send_signal(signal.SIGINT)
+        teleop.communicate(timeout=30)
+    assert drove.sent > 10 and seen.sent == 0
+    assert seen.agreement_deg is not None and seen.agreement_ticks > 10, seen
+    assert seen.agreement_deg < 15.0, seen

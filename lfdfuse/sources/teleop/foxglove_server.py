@@ -1,9 +1,12 @@
 """The live Foxglove side of teleop: the official SDK's WebSocket server (DESIGN §10).
 
-The server streams ``/world``, ``/scan``, ``/pose``, ``/tf`` and ``/targets`` with the same
-JSON schemas the MCAP uses, advertises ``clientPublish`` with ``json`` encoding, and takes
-the ``geometry_msgs/Twist`` (or ``geometry_msgs/msg/Twist``) messages a client — Foxglove's
-Teleop panel — publishes on ``/cmd_vel``. Client channels are matched by topic.
+The server streams ``/world``, ``/scan``, ``/pose``, ``/tf``, ``/targets`` and the command the
+robot is driven by this period (``/cmd_vel``, whoever gave it: a key, a script, a client) with
+the same JSON schemas the MCAP uses, as a robot's bridge streams its own ``/cmd_vel`` (so
+``lfdfuse drive --shadow`` can watch a person drive it). It advertises ``clientPublish`` with
+``json`` encoding, and takes the ``geometry_msgs/Twist`` (or ``geometry_msgs/msg/Twist``)
+messages a client — Foxglove's Teleop panel — publishes on ``/cmd_vel``. Client channels are
+matched by topic.
 
 The SDK calls the listener on its own threads, and a slow callback stalls that client: the
 callbacks only note the channel or put the raw payload on a queue. The control loop drains
@@ -32,7 +35,7 @@ from lfdfuse.world.model import World
 
 CMD_TOPIC = "/cmd_vel"
 TWIST_SCHEMAS = ("geometry_msgs/Twist", "geometry_msgs/msg/Twist")
-LIVE_TOPICS = ("/world", "/scan", "/pose", "/tf", "/targets")
+LIVE_TOPICS = ("/world", "/scan", "/pose", "/tf", "/targets", CMD_TOPIC)
 _QUEUE_MAX = 1000  # a client flooding /cmd_vel drops messages rather than memory
 
 
@@ -172,7 +175,7 @@ class FoxgloveLive:
             out.append(Input("message", text, f"foxglove client {r.client} ({r.encoding})", r.schema))
 
     def record(self, obs: Observation, command: tuple[float, float]) -> None:
-        """Stream this period's sensing to every subscribed client."""
+        """Stream this period's sensing, and the command driving the robot, to every subscribed client."""
         t, pose, reading = obs.t_ns, obs.pose, obs.reading
         if self._listener.world_wanted.is_set():
             self._listener.world_wanted.clear()
@@ -181,6 +184,7 @@ class FoxgloveLive:
         self._log("/pose", t, msg.pose_in_frame(t, pose.x, pose.y, pose.theta))
         self._log("/tf", t, msg.frame_transform(t, pose.x, pose.y, pose.theta))
         self._log("/targets", t, msg.target_detections(t, reading.detections))
+        self._log(CMD_TOPIC, t, msg.twist(t, command[0], command[1]))
 
     def _log(self, topic: str, t_ns: int, message: dict[str, object]) -> None:
         self._channels[topic].log(orjson.dumps(message), log_time=t_ns)
