@@ -24,11 +24,14 @@ from lfdfuse.log import lfd
 from lfdfuse.log.codec import MessageError
 from lfdfuse.log.reader import file_info, hold, iter_messages, read_run
 from lfdfuse.robot.readings import ScanGeometry
-from lfdfuse.segment.read import read_segmented
+from lfdfuse.segment.read import network_ticks, read_segmented
 from lfdfuse.sim.robot import RobotParams
 from lfdfuse.world.model import World, builtin_names, load_world, parse_world
 
 LogKind = Literal["demo", "segmented", "run"]
+
+#: the part of a correction run the person drove (not the network's step it happened in)
+PERSON_PART = "the person (took over)"
 
 
 @dataclass(frozen=True)
@@ -46,8 +49,8 @@ class PathData:
     """What a log shows on a map.
 
     ``t_s (N,)`` seconds from the first scan, ``pose (N, 3)`` x, y (m), yaw (rad); ``part (N,)``
-    indexes ``part_names`` (the goal segment or the network step of each tick; -1: none, e.g. a
-    run after its last goal); ``bac (N,)`` the BAC of each tick (None for a plain demo);
+    indexes ``part_names`` (the goal segment or the network step of each tick, or
+    :data:`PERSON_PART` where a person had taken over; -1: none, e.g. a run after its last goal); ``bac (N,)`` the BAC of each tick (None for a plain demo);
     ``collisions`` tick indices where a contact began.
     """
 
@@ -275,4 +278,8 @@ def _run(
         i = int(np.clip(np.searchsorted(scan_t, t), 0, len(scan_t) - 1))
         goals.append(GoalMark(g, float(pose[i, 0]), float(pose[i, 1]), float(t_s[i])))
     bac = np.array(bacs, dtype=np.int64)[at]
+    by_net = network_ticks(path, scan_t)  # a correction (teleop --table): who drove each tick
+    if by_net is not None and not by_net.all():
+        names = (*names, PERSON_PART)
+        part = np.where(by_net, part, len(names) - 1)
     return PathData("run", src, world, t_s, pose, part, names, bac, tuple(goals), hits, meta)

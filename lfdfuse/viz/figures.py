@@ -17,7 +17,7 @@ from matplotlib.collections import LineCollection
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch, Polygon
 
-from lfdfuse.evaluate.plot_data import PathData
+from lfdfuse.evaluate.plot_data import PERSON_PART, PathData
 from lfdfuse.network.table import StepRows
 from lfdfuse.viz import colors
 from lfdfuse.world.model import World
@@ -111,8 +111,9 @@ def draw_path(ax: Axes, data: PathData, *, bac_ticks: bool = True, lw: float = 2
             continue  # the tick or two after the last goal
         if j < 0:
             color, label = colors.UNKNOWN_COLOR, "after the last goal"
-        elif data.kind == "demo":
-            color, label = colors.PATH_COLOR, data.part_names[j]
+        elif data.kind == "demo" or data.part_names[j] == PERSON_PART:
+            color = colors.PATH_COLOR if data.kind == "demo" else colors.step_color(j)
+            label = data.part_names[j]
         else:
             color, label = colors.step_color(j), f"{data.part_label} {data.part_names[j]}"
         ax.plot(

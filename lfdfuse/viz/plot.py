@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 from matplotlib.legend import Legend
 
 from lfdfuse.errors import ConfigError, LfdError
-from lfdfuse.evaluate.plot_data import PathData, load_log
+from lfdfuse.evaluate.plot_data import PERSON_PART, PathData, load_log
 from lfdfuse.files import write_bytes_atomic
 from lfdfuse.network.table import FusionTable, load_table, table_steps
 from lfdfuse.viz import figures
@@ -153,7 +153,11 @@ def plot_file(
         return PlotResult(str(out), "table", w, h, f"{len(steps)} steps, {rows} BAC rows")
     data = load_log(p)
     w, h = save_figure(map_figure(data, title=title), out)
-    parts = "" if data.kind == "demo" else f", {len(data.part_names)} {data.part_label}s"
+    steps = [n for n in data.part_names if n != PERSON_PART]
+    parts = "" if data.kind == "demo" else f", {counted(len(steps), data.part_label)}"
+    if PERSON_PART in data.part_names:
+        mine = int((data.part == data.part_names.index(PERSON_PART)).sum())
+        parts += f" (the person drove {counted(mine, 'scan')})"
     summary = (
         f"{data.kind}: {len(data.t_s)} scans{parts}, {len(data.bac_changes())} BAC changes, "
         f"{counted(len(data.goals), 'goal reached', 'goals reached')}, {counted(len(data.collisions), 'collision')}"

@@ -181,3 +181,19 @@ def test_run_layout_names_channels_that_runs_have() -> None:
     used = topics | {p.split(".")[0] for p in paths}
     assert used <= known, used - known
     assert {"/world", "/scan", "/pose", "/lfd/overlay"} <= topics
+
+
+def test_a_correction_plots_the_persons_ticks_as_the_persons(tmp_path: Path) -> None:
+    """Who drove is shown: the ticks a person drove are their own part, not the network's step."""
+    from lfdfuse.evaluate.plot_data import PERSON_PART
+    from tests.sources.teleop.correction import correction_log
+
+    path, person = correction_log(tmp_path)
+    data = load_log(path)
+    theirs = np.flatnonzero(data.part == data.part_names.index(PERSON_PART))
+    # one takeover: as many ticks as the person drove, in one stretch; the rest the network's
+    assert len(theirs) == len(person) and np.all(np.diff(theirs) == 1)
+    assert np.all(data.part[data.part != data.part_names.index(PERSON_PART)] >= 0)
+    res = CliRunner().invoke(app, ["plot", str(path), "-o", str(tmp_path / "fix.png")])
+    assert res.exit_code == 0, res.output
+    assert f"1 network step (the person drove {len(person)} scans)" in res.output, res.output
