@@ -8,9 +8,15 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from hypothesis import settings
 
 # before any test module imports numpy: lfdfuse sets one BLAS thread per process (see its __init__)
 import lfdfuse  # noqa: F401
+
+# speed is measured in the benchmarks, never by a test: no per-example deadline (on a loaded
+# machine an example of any test can take longer than hypothesis's default 200 ms)
+settings.register_profile("lfdfuse", deadline=None)
+settings.load_profile("lfdfuse")
 
 ROOT = Path(__file__).resolve().parents[1]
 # the shared folder beside the checkout (real data, mcap-check); LFDFUSE_SHARED overrides it
