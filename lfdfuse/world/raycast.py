@@ -23,6 +23,8 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from lfdfuse.world import raycast_kernel as _k
+
 _EPS = 1e-12
 _TWO_PI = 2.0 * math.pi
 #: sizes of the candidate bands, nearest first; the last band takes all the rest
@@ -33,6 +35,8 @@ _SECTORS = 256
 _CULL_MIN = 64
 #: cached per-cell band arrays, cleared when it grows past this many cells
 _CACHE_CELLS = 4096
+#: cached per-cell sector lists of the compiled cast, cleared when they grow past this many entries
+_CACHE_ENTRIES = 16_000_000
 #: most (segment, cell) pairs examined at once while building the index
 _BUILD_CHUNK = 1_000_000
 #: most grid cells; a larger world gets larger cells
@@ -238,6 +242,8 @@ class RayCaster:
         self._build_index()
         self._all = [_Band(self.segments, math.inf)]
         self._cache: dict[int, list[_Band]] = {}
+        self._sector_cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._sector_entries = 0
 
     def _build_index(self) -> None:
         """Per cell, the segments within max range + half diagonal of its centre, nearest first.
@@ -266,6 +272,45 @@ class RayCaster:
         self._lower_um = (key & q_max).astype(np.uint32)
         cells = key >> 32
         self._offsets = np.searchsorted(cells, np.arange(self.nx * self.ny + 1)).astype(np.int64)
+        # the bounds in metres, as the bands' cuts read them; outside the grid: every segment
+        self._lower_m = self._lower_um.astype(np.float64) * 1e-6
+        self._all_ids = np.arange(len(self.segments), dtype=np.int32)
+        self._all_lower = np.zeros(len(self.segments))
+
+    def _cell(self, x: float, y: float) -> int:
+        """The grid cell holding ``(x, y)``, or -1 outside the grid."""
+        i = int((x - self.x0) // self.cell_m)
+        j = int((y - self.y0) // self.cell_m)
+        return i * self.ny + j if 0 <= i < self.nx and 0 <= j < self.ny else -1
+
+    def _candidates(self, c: int) -> tuple[np.ndarray, np.ndarray]:
+        """The sorted candidate ids of cell ``c`` (every segment for -1) and their lower bounds (m)."""
+        if c < 0:
+            return self._all_ids, self._all_lower
+        lo, hi = int(self._offsets[c]), int(self._offsets[c + 1])
+        return self._index[lo:hi], self._lower_m[lo:hi]
+
+    def _sector_lists(self, c: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Cell ``c``'s candidates for the compiled cast, cached: ``cand`` ``(K, 5)`` nearest first
+        as ``[ax, ay, bx − ax, by − ay, lower bound m]``, and per angular sector of the directions
+        that can reach them from inside the cell, their positions in ``cand`` (``starts``
+        ``(_SECTORS + 1,)`` into ``entries``)."""
+        got = self._sector_cache.get(c)
+        if got is None:
+            ids, lower = self._candidates(c)
+            seg = self.segments[ids]
+            i, j = divmod(c, self.ny)
+            centre = (self.x0 + (i + 0.5) * self.cell_m, self.y0 + (j + 0.5) * self.cell_m)
+            bins = _sector_bins(seg, *centre, self.cell_m * math.sqrt(0.5))
+            cand = np.column_stack([seg[:, :2], seg[:, 2:] - seg[:, :2], lower])
+            starts = np.empty(_SECTORS + 1, np.int64)
+            got = (cand, starts, _k.sector_lists(bins, _SECTORS, starts))
+            if self._sector_entries + len(got[2]) + len(ids) > _CACHE_ENTRIES:
+                self._sector_cache.clear()
+                self._sector_entries = 0
+            self._sector_cache[c] = got
+            self._sector_entries += len(got[2]) + len(ids)
+        return got
 
     def _bands(self, x: float, y: float) -> list[_Band]:
         """The candidate bands of the cell holding ``(x, y)`` (all segments outside the grid)."""
@@ -304,7 +349,28 @@ class RayCaster:
         return np.concatenate([b.seg for b in bands]) if bands else np.zeros((0, 4))
 
     def cast(self, x: float, y: float, angles_rad: np.ndarray) -> np.ndarray:
-        """Ranges ``(B,)`` in metres along world-frame ``angles_rad`` ``(B,)``; no return = max range."""
+        """Ranges ``(B,)`` in metres along world-frame ``angles_rad`` ``(B,)``; no return = max range.
+
+        The compiled loop (:mod:`lfdfuse.world.raycast_kernel`) when it is ready, else
+        :meth:`cast_reference`: the same values.
+        """
+        if _k.cast_loop.ready() and _k.cast_sectors_loop.ready() and _k.sector_lists.ready():
+            angles = np.asarray(angles_rad, dtype=np.float64).reshape(-1)
+            out = np.empty(angles.shape)
+            c = self._cell(x, y)
+            dx, dy = np.cos(angles), np.sin(angles)
+            if c < 0:
+                _k.cast_loop(
+                    self.segments, self._all_ids, self._all_lower, x, y, dx, dy, self.max_range_m, out
+                )
+            else:
+                cand, starts, entries = self._sector_lists(c)
+                _k.cast_sectors_loop(cand, starts, entries, x, y, angles, dx, dy, self.max_range_m, out)
+            return out
+        return self.cast_reference(x, y, angles_rad)
+
+    def cast_reference(self, x: float, y: float, angles_rad: np.ndarray) -> np.ndarray:
+        """:meth:`cast` in numpy, band by band: the reference the compiled loop is tested against."""
         angles = np.asarray(angles_rad, dtype=np.float64).reshape(-1)
         best = np.full(angles.shape, np.inf)
         if len(angles) == 0:
@@ -391,6 +457,13 @@ class RayCaster:
 
     def clearance(self, x: float, y: float) -> float:
         """Distance (m) from a point to the nearest segment, or max range if none is nearer."""
+        if _k.clearance_loop.ready():
+            ids, lower = self._candidates(self._cell(x, y))
+            return float(_k.clearance_loop(self.segments, ids, lower, x, y, self.max_range_m))
+        return self.clearance_reference(x, y)
+
+    def clearance_reference(self, x: float, y: float) -> float:
+        """:meth:`clearance` in numpy, band by band."""
         best = math.inf
         px, py = np.array([x]), np.array([y])
         for band in self._bands(x, y):
@@ -402,6 +475,17 @@ class RayCaster:
 
     def visible(self, x0: float, y0: float, x1: float, y1: float) -> bool:
         """True when the straight line between two points crosses no segment."""
+        dx, dy = x1 - x0, y1 - y0
+        dist = math.hypot(dx, dy)
+        if dist == 0.0:
+            return True
+        if _k.blocked_loop.ready():
+            ids, lower = self._candidates(self._cell(x0, y0) if dist <= self.max_range_m else -1)
+            return not _k.blocked_loop(self.segments, ids, lower, x0, y0, dx / dist, dy / dist, dist)
+        return self.visible_reference(x0, y0, x1, y1)
+
+    def visible_reference(self, x0: float, y0: float, x1: float, y1: float) -> bool:
+        """:meth:`visible` in numpy, band by band."""
         dx, dy = x1 - x0, y1 - y0
         dist = math.hypot(dx, dy)
         if dist == 0.0:
