@@ -354,19 +354,21 @@ class RayCaster:
         The compiled loop (:mod:`lfdfuse.world.raycast_kernel`) when it is ready, else
         :meth:`cast_reference`: the same values.
         """
-        if _k.cast_loop.ready() and _k.cast_sectors_loop.ready() and _k.sector_lists.ready():
-            angles = np.asarray(angles_rad, dtype=np.float64).reshape(-1)
-            out = np.empty(angles.shape)
+        if _k.cast_sectors_loop.ready():
             c = self._cell(x, y)
-            dx, dy = np.cos(angles), np.sin(angles)
-            if c < 0:
-                _k.cast_loop(
-                    self.segments, self._all_ids, self._all_lower, x, y, dx, dy, self.max_range_m, out
-                )
-            else:
-                cand, starts, entries = self._sector_lists(c)
-                _k.cast_sectors_loop(cand, starts, entries, x, y, angles, dx, dy, self.max_range_m, out)
-            return out
+            got = self._sector_cache.get(c)
+            if got is None and c >= 0 and _k.sector_lists.ready():
+                got = self._sector_lists(c)
+            if got is not None or c < 0 and _k.cast_loop.ready():
+                angles = np.asarray(angles_rad, dtype=np.float64).reshape(-1)
+                out = np.empty(angles.shape)
+                dx, dy = np.cos(angles), np.sin(angles)
+                if got is None:
+                    ids, lower, r = self._all_ids, self._all_lower, self.max_range_m
+                    _k.cast_loop(self.segments, ids, lower, x, y, dx, dy, r, out)
+                else:
+                    _k.cast_sectors_loop(*got, x, y, angles, dx, dy, self.max_range_m, out)
+                return out
         return self.cast_reference(x, y, angles_rad)
 
     def cast_reference(self, x: float, y: float, angles_rad: np.ndarray) -> np.ndarray:
@@ -389,7 +391,10 @@ class RayCaster:
             active = active[best[active] > band.cut_m]
             if len(active) == 0:
                 break
-        return np.asarray(np.minimum(best, self.max_range_m, out=best))
+        np.minimum(best, self.max_range_m, out=best)
+        # a range of zero (the origin on a wall) is +0.0 whichever of ±0 the order of hits kept
+        best += 0.0
+        return best
 
     @staticmethod
     def _facing(band: _Band, phi: np.ndarray) -> _Band:

@@ -8,7 +8,7 @@ segment's bound: a beam that hits a wall 1 m away looks at the walls within abou
 Each (beam, segment) pair is solved with the same float64 operations, in the same order, as
 :func:`~lfdfuse.world.raycast.intersect` (the parallel and collinear cases included), and a
 minimum does not depend on the order it is taken in, so the results equal the numpy
-reference's. The beam directions come in precomputed (numpy's ``cos``/``sin``), so no
+reference's (a range of zero is +0.0 in both). The beam directions come in precomputed (numpy's ``cos``/``sin``), so no
 transcendental function of numba's own enters a result.
 
 Every loop is a :func:`lfdfuse.jit.kernel`: nothing here imports numba.
@@ -73,7 +73,7 @@ def _cast_loop(
                     continue
             if t < best:
                 best = t
-        out[b] = best
+        out[b] = best + 0.0  # +0.0 for a range of zero, as the reference
 
 
 def _clearance_loop(
@@ -224,7 +224,7 @@ def _cast_sectors_loop(
                     continue
             if t < best:
                 best = t
-        out[b] = best
+        out[b] = best + 0.0  # +0.0 for a range of zero, as the reference
 
 
 sector_lists = kernel(_sector_lists)
