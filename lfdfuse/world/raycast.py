@@ -18,7 +18,10 @@ segments × reach², never cells × segments.
 
 from __future__ import annotations
 
+import hashlib
 import math
+import threading
+from collections import OrderedDict
 from collections.abc import Iterator
 
 import numpy as np
@@ -39,6 +42,8 @@ _CACHE_CELLS = 4096
 _CACHE_ENTRIES = 16_000_000
 #: most (segment, cell) pairs examined at once while building the index
 _BUILD_CHUNK = 1_000_000
+#: casters kept by :meth:`RayCaster.shared` (their index is the costly part of a run's setup)
+_SHARED_KEPT = 2
 #: most grid cells; a larger world gets larger cells
 _MAX_CELLS = 4_000_000
 #: most (segment, cell) pairs the index may examine; more segments get larger cells
@@ -93,9 +98,20 @@ def near_pairs(
     count = np.maximum(i1 - i0 + 1, 0) * nj
     ends = np.cumsum(count)
     start = 0
+    compiled = _k.near_pairs_loop.ready()
+    ni = np.maximum(i1 - i0 + 1, 0)
     while start < n_seg:
         done_before = int(ends[start - 1]) if start else 0
         stop = max(start + 1, int(np.searchsorted(ends, done_before + _BUILD_CHUNK, "right")))
+        if compiled:
+            size = int(ends[stop - 1]) - done_before
+            s, ci, cj = (np.empty(size, np.int64) for _ in range(3))
+            d = np.empty(size)
+            args = (x0, y0, cell_m, reach_m, s, ci, cj, d)
+            n = _k.near_pairs_loop(seg, start, stop, i0, j0, ni, nj, *args)
+            yield s[:n], ci[:n], cj[:n], d[:n]
+            start = stop
+            continue
         cnt = count[start:stop]
         s = np.repeat(np.arange(start, stop), cnt)
         local = np.arange(int(cnt.sum())) - np.repeat(np.cumsum(cnt) - cnt, cnt)
@@ -244,6 +260,28 @@ class RayCaster:
         self._cache: dict[int, list[_Band]] = {}
         self._sector_cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._sector_entries = 0
+
+    _shared: OrderedDict[tuple[bytes, float, float], RayCaster] = OrderedDict()
+    _shared_lock = threading.Lock()
+
+    @classmethod
+    def shared(cls, segments: np.ndarray, *, max_range_m: float = 8.0, cell_m: float = 1.0) -> RayCaster:
+        """A caster of these segments, built once per process for the last few maps: every run
+        in a world (each start of ``execute``, each test) casts on the same index. Casting has no
+        state that changes a result, so a shared caster answers as a new one would."""
+        seg = np.ascontiguousarray(segments, dtype=np.float64).reshape(-1, 4)
+        key = (hashlib.blake2b(seg.tobytes(), digest_size=20).digest(), float(max_range_m), float(cell_m))
+        with cls._shared_lock:
+            rc = cls._shared.get(key)
+            if rc is not None:
+                cls._shared.move_to_end(key)
+                return rc
+        rc = cls(seg, max_range_m=max_range_m, cell_m=cell_m)
+        with cls._shared_lock:
+            cls._shared[key] = rc
+            while len(cls._shared) > _SHARED_KEPT:
+                cls._shared.popitem(last=False)
+        return rc
 
     def _build_index(self) -> None:
         """Per cell, the segments within max range + half diagonal of its centre, nearest first.

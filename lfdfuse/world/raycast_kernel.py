@@ -229,3 +229,55 @@ def _cast_sectors_loop(
 
 sector_lists = kernel(_sector_lists)
 cast_sectors_loop = kernel(_cast_sectors_loop)
+
+
+def _near_pairs_loop(
+    seg: np.ndarray,
+    start: int,
+    stop: int,
+    i0: np.ndarray,
+    j0: np.ndarray,
+    ni: np.ndarray,
+    nj: np.ndarray,
+    x0: float,
+    y0: float,
+    cell_m: float,
+    reach_m: float,
+    out_s: np.ndarray,
+    out_i: np.ndarray,
+    out_j: np.ndarray,
+    out_d: np.ndarray,
+) -> int:
+    """The pairs of segments ``start:stop`` and the cells of their ``ni × nj`` boxes from
+    ``(i0, j0)`` whose centre is within ``reach_m``, in the order and with the distances of
+    :func:`~lfdfuse.world.raycast.near_pairs` (its ``_pair_distance``, operation for operation);
+    returns how many were written."""
+    n = 0
+    for s in range(start, stop):
+        ax = seg[s, 0]
+        ay = seg[s, 1]
+        ex = seg[s, 2] - ax
+        ey = seg[s, 3] - ay
+        ll = ex * ex + ey * ey
+        div = ll if ll > 0 else 1.0
+        for a in range(ni[s]):
+            ci = i0[s] + a
+            px = x0 + (ci + 0.5) * cell_m
+            for b in range(nj[s]):
+                cj = j0[s] + b
+                py = y0 + (cj + 0.5) * cell_m
+                t = ((px - ax) * ex + (py - ay) * ey) / div
+                t = min(max(t, 0.0), 1.0)
+                qx = ax + t * ex - px
+                qy = ay + t * ey - py
+                d = math.sqrt(qx * qx + qy * qy)
+                if d <= reach_m:
+                    out_s[n] = s
+                    out_i[n] = ci
+                    out_j[n] = cj
+                    out_d[n] = d
+                    n += 1
+    return n
+
+
+near_pairs_loop = kernel(_near_pairs_loop)

@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from lfdfuse import jit
 from lfdfuse.world import raycast_kernel
 from lfdfuse.world.model import load_world
-from lfdfuse.world.raycast import RayCaster
+from lfdfuse.world.raycast import RayCaster, near_pairs
 from tests.conftest import SHARED
 
 MAPS = SHARED / "realdata" / "maps"
@@ -164,3 +164,38 @@ def test_a_kernel_that_does_not_compile_warns_once_and_runs_the_reference(
     rc = RayCaster(load_world("building").segments, max_range_m=8.0)
     beams = np.linspace(-math.pi / 2, math.pi / 2, 181)
     assert rc.cast(3.0, 3.0, beams).tobytes() == rc.cast_reference(3.0, 3.0, beams).tobytes()
+
+
+@pytest.mark.parametrize(("n", "cell", "reach"), [(300, 1.0, 8.7), (2000, 0.2, 1.2), (5, 3.0, 0.5)])
+def test_the_compiled_index_pairs_are_the_reference_pairs(
+    monkeypatch: pytest.MonkeyPatch, n: int, cell: float, reach: float
+) -> None:
+    rng = np.random.default_rng(n)
+    seg = rng.uniform(0, 30, (n, 4))
+    seg[: n // 10, 2:] = seg[: n // 10, :2]  # zero-length segments
+    kw = {
+        "x0": -9.0,
+        "y0": -9.0,
+        "cell_m": cell,
+        "nx": int(48 / cell),
+        "ny": int(40 / cell),
+        "reach_m": reach,
+    }
+    got = [np.concatenate(c) for c in zip(*near_pairs(seg, **kw), strict=True)]
+    monkeypatch.setenv(jit.MODE, "numpy")
+    want = [np.concatenate(c) for c in zip(*near_pairs(seg, **kw), strict=True)]
+    assert len(got[0]) > 0
+    for a, b in zip(got, want, strict=True):
+        assert a.tobytes() == b.astype(a.dtype).tobytes()
+
+
+def test_a_shared_caster_is_built_once_per_map() -> None:
+    seg = load_world("building").segments
+    rc = RayCaster.shared(seg, max_range_m=8.0)
+    assert RayCaster.shared(seg.copy(), max_range_m=8.0) is rc
+    assert RayCaster.shared(seg, max_range_m=5.0) is not rc
+    assert RayCaster.shared(seg[1:], max_range_m=8.0) is not rc
+    beams = np.linspace(-math.pi / 2, math.pi / 2, 181)
+    assert (
+        rc.cast(3.0, 3.0, beams).tobytes() == RayCaster(seg, max_range_m=8.0).cast(3.0, 3.0, beams).tobytes()
+    )
