@@ -42,6 +42,13 @@ _CACHE_CELLS = 4096
 _CACHE_ENTRIES = 16_000_000
 #: most (segment, cell) pairs examined at once while building the index
 _BUILD_CHUNK = 1_000_000
+#: calls (casts, clearances, lines of sight) a process answers with the numpy reference before it
+#: loads the compiled loops: loading numba and its cached kernels costs about a second of CPU,
+#: more than a short run's calls take in numpy (the answers are the same either way)
+_WARMUP_CALLS = 1000
+_calls = [0]
+#: (segment, cell) pairs for which :func:`near_pairs` loads the compiled loop before that
+_COMPILED_PAIRS = 4_000_000
 #: casters kept by :meth:`RayCaster.shared` (their index is the costly part of a run's setup)
 _SHARED_KEPT = 2
 #: most grid cells; a larger world gets larger cells
@@ -98,7 +105,11 @@ def near_pairs(
     count = np.maximum(i1 - i0 + 1, 0) * nj
     ends = np.cumsum(count)
     start = 0
-    compiled = _k.near_pairs_loop.ready()
+    # compiled once the process casts with the compiled loops, or when the pairs are so many
+    # that loading them pays at once
+    compiled = (_calls[0] >= _WARMUP_CALLS or bool(n_seg) and int(ends[-1]) > _COMPILED_PAIRS) and (
+        _k.near_pairs_loop.ready()
+    )
     ni = np.maximum(i1 - i0 + 1, 0)
     while start < n_seg:
         done_before = int(ends[start - 1]) if start else 0
@@ -162,6 +173,14 @@ def _collinear(
     inside = (ta <= 0.0) & (tb >= 0.0) | (tb <= 0.0) & (ta >= 0.0)
     ahead = np.where(np.minimum(ta, tb) >= 0.0, np.minimum(ta, tb), np.inf)
     return np.where(collinear, np.where(inside, 0.0, ahead), out)
+
+
+def _warm() -> bool:
+    """True once this process has made enough calls for the compiled loops to pay."""
+    if _calls[0] < _WARMUP_CALLS:
+        _calls[0] += 1
+        return False
+    return True
 
 
 class _Band:
@@ -389,10 +408,11 @@ class RayCaster:
     def cast(self, x: float, y: float, angles_rad: np.ndarray) -> np.ndarray:
         """Ranges ``(B,)`` in metres along world-frame ``angles_rad`` ``(B,)``; no return = max range.
 
-        The compiled loop (:mod:`lfdfuse.world.raycast_kernel`) when it is ready, else
-        :meth:`cast_reference`: the same values.
+        The compiled loop (:mod:`lfdfuse.world.raycast_kernel`) when it is ready (and the
+        process has made its first ``_WARMUP_CALLS`` calls), else :meth:`cast_reference`: the
+        same values.
         """
-        if _k.cast_sectors_loop.ready():
+        if _warm() and _k.cast_sectors_loop.ready():
             c = self._cell(x, y)
             got = self._sector_cache.get(c)
             if got is None and c >= 0 and _k.sector_lists.ready():
@@ -500,7 +520,7 @@ class RayCaster:
 
     def clearance(self, x: float, y: float) -> float:
         """Distance (m) from a point to the nearest segment, or max range if none is nearer."""
-        if _k.clearance_loop.ready():
+        if _warm() and _k.clearance_loop.ready():
             ids, lower = self._candidates(self._cell(x, y))
             return float(_k.clearance_loop(self.segments, ids, lower, x, y, self.max_range_m))
         return self.clearance_reference(x, y)
@@ -522,7 +542,7 @@ class RayCaster:
         dist = math.hypot(dx, dy)
         if dist == 0.0:
             return True
-        if _k.blocked_loop.ready():
+        if _warm() and _k.blocked_loop.ready():
             ids, lower = self._candidates(self._cell(x0, y0) if dist <= self.max_range_m else -1)
             return not _k.blocked_loop(self.segments, ids, lower, x0, y0, dx / dist, dy / dist, dist)
         return self.visible_reference(x0, y0, x1, y1)

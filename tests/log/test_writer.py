@@ -133,5 +133,7 @@ def test_messages_across_chunks_are_written_as_mcap_writes_them(
 ) -> None:
     # more than one 4 MiB chunk, times out of order
     blob = bytes(range(256)) * 40
-    messages = [("/scan" if k % 3 else "/pose", (k * 7919) % 5000, blob[: (k * 3) % 10_000]) for k in range(2500)]
+    messages = [
+        ("/scan" if k % 3 else "/pose", (k * 7919) % 5000, blob[: (k * 3) % 10_000]) for k in range(2500)
+    ]
     _two_ways(tmp_path, monkeypatch, messages)

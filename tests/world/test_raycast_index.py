@@ -22,6 +22,12 @@ from tests.conftest import SHARED
 MAPS = SHARED / "realdata" / "maps"
 
 
+@pytest.fixture(autouse=True)
+def _compiled_from_the_first_call(monkeypatch: pytest.MonkeyPatch) -> None:
+    # cast() runs the compiled loops at once (cast_reference() the numpy bands): both are checked
+    monkeypatch.setattr(raycast, "_WARMUP_CALLS", 0)
+
+
 def brute_cast(seg: np.ndarray, x: float, y: float, angles: np.ndarray, max_range: float) -> np.ndarray:
     n = len(angles)
     if len(seg) == 0:

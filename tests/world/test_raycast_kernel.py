@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lfdfuse import jit
-from lfdfuse.world import raycast_kernel
+from lfdfuse.world import raycast, raycast_kernel
 from lfdfuse.world.model import load_world
 from lfdfuse.world.raycast import RayCaster, near_pairs
 from tests.conftest import SHARED
@@ -26,6 +26,7 @@ MAPS = SHARED / "realdata" / "maps"
 @pytest.fixture(autouse=True)
 def _compiled(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.delenv(jit.MODE, raising=False)
+    monkeypatch.setattr(raycast, "_WARMUP_CALLS", 0)  # compiled from the first call
     for k in (raycast_kernel.cast_loop, raycast_kernel.cast_sectors_loop, raycast_kernel.sector_lists):
         assert k.ready(), "numba is a dependency: the compiled raycaster must compile here"
 
@@ -187,6 +188,22 @@ def test_the_compiled_index_pairs_are_the_reference_pairs(
     assert len(got[0]) > 0
     for a, b in zip(got, want, strict=True):
         assert a.tobytes() == b.astype(a.dtype).tobytes()
+
+
+def test_a_process_casts_in_numpy_until_the_compiled_loops_pay(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(raycast, "_WARMUP_CALLS", 3)
+    monkeypatch.setattr(raycast, "_calls", [0])
+    used: list[str] = []
+    real = RayCaster.cast_reference
+
+    def spy(self: RayCaster, x: float, y: float, angles: np.ndarray) -> np.ndarray:
+        used.append("numpy")
+        return real(self, x, y, angles)
+
+    monkeypatch.setattr(RayCaster, "cast_reference", spy)
+    rc = RayCaster(np.array([[2.0, -1.0, 2.0, 1.0]]), max_range_m=8.0)
+    got = [rc.cast(0.0, 0.0, np.array([0.0, 0.1])).tobytes() for _ in range(6)]
+    assert used == ["numpy"] * 3 and len(set(got)) == 1
 
 
 def test_a_shared_caster_is_built_once_per_map() -> None:
