@@ -277,7 +277,7 @@ class RayCaster:
         self._build_index()
         self._all = [_Band(self.segments, math.inf)]
         self._cache: dict[int, list[_Band]] = {}
-        self._sector_cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._sector_cache: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._sector_entries = 0
 
     _shared: OrderedDict[tuple[bytes, float, float], RayCaster] = OrderedDict()
