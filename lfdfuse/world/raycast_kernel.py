@@ -6,7 +6,7 @@ loops walk that list nearest first and stop as soon as the answer is no farther 
 segment's bound: a beam that hits a wall 1 m away looks at the walls within about 1 m only.
 
 Each (beam, segment) pair is solved with the same float64 operations, in the same order, as
-:func:`~lfdfuse.world.raycast.intersect` (the parallel and collinear cases included), and a
+:func:`~lfdfuse.world.segments.intersect` (the parallel and collinear cases included), and a
 minimum does not depend on the order it is taken in, so the results equal the numpy
 reference's (a range of zero is +0.0 in both). The beam directions come in precomputed (numpy's ``cos``/``sin``), so no
 transcendental function of numba's own enters a result.
@@ -80,7 +80,7 @@ def _clearance_loop(
     seg: np.ndarray, ids: np.ndarray, lower: np.ndarray, px: float, py: float, cap: float
 ) -> float:
     """Distance from ``(px, py)`` to the nearest candidate, at most ``cap``: the operations of
-    :func:`~lfdfuse.world.raycast._point_segment_distance`."""
+    :func:`~lfdfuse.world.segments._point_segment_distance`."""
     best = cap
     for k in range(ids.shape[0]):
         if lower[k] >= best:
@@ -250,7 +250,7 @@ def _near_pairs_loop(
 ) -> int:
     """The pairs of segments ``start:stop`` and the cells of their ``ni × nj`` boxes from
     ``(i0, j0)`` whose centre is within ``reach_m``, in the order and with the distances of
-    :func:`~lfdfuse.world.raycast.near_pairs` (its ``_pair_distance``, operation for operation);
+    :func:`~lfdfuse.world.segments.near_pairs` (its ``_pair_distance``, operation for operation);
     returns how many were written."""
     n = 0
     for s in range(start, stop):

@@ -29,13 +29,13 @@ from lfdfuse.sim.loop import RunSummary
 from lfdfuse.sim.sensors import LaserParams
 from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import Leg
-from lfdfuse.world import raycast
+from lfdfuse.world import segments
 from lfdfuse.world.model import load_world
 from lfdfuse.world.raycast import RayCaster
 
 # the benchmarks time the compiled loops from the first call (a process otherwise answers its
 # first calls with the numpy references, as a short CLI run does)
-raycast._WARMUP_CALLS = 0
+segments._WARMUP_CALLS = 0
 
 
 @dataclass(frozen=True)

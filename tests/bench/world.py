@@ -31,7 +31,8 @@ import numpy as np
 from lfdfuse.sim.sensors import LaserParams
 from lfdfuse.sources.planner import Planner, PlannerParams
 from lfdfuse.world.model import World, load_world
-from lfdfuse.world.raycast import RayCaster, _point_segment_distance, intersect
+from lfdfuse.world.raycast import RayCaster
+from lfdfuse.world.segments import _point_segment_distance, intersect
 from tests.bench.pipeline import box_map, numpy_kernels, rate, simulate_rate
 
 Row = dict[str, object]

@@ -14,9 +14,10 @@ import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse.world import raycast
+from lfdfuse.world import raycast, segments
 from lfdfuse.world.model import load_world
-from lfdfuse.world.raycast import RayCaster, _point_segment_distance, intersect, near_pairs
+from lfdfuse.world.raycast import RayCaster
+from lfdfuse.world.segments import _point_segment_distance, intersect, near_pairs
 from tests.conftest import SHARED
 
 MAPS = SHARED / "realdata" / "maps"
@@ -25,7 +26,7 @@ MAPS = SHARED / "realdata" / "maps"
 @pytest.fixture(autouse=True)
 def _compiled_from_the_first_call(monkeypatch: pytest.MonkeyPatch) -> None:
     # cast() runs the compiled loops at once (cast_reference() the numpy bands): both are checked
-    monkeypatch.setattr(raycast, "_WARMUP_CALLS", 0)
+    monkeypatch.setattr(segments, "_WARMUP_CALLS", 0)
 
 
 def brute_cast(seg: np.ndarray, x: float, y: float, angles: np.ndarray, max_range: float) -> np.ndarray:
