@@ -36,6 +36,12 @@ def compiled_wanted() -> bool:
     return os.environ.get(MODE, "numba").strip().lower() != "numpy"
 
 
+def _first_line(exc: BaseException) -> str:
+    """An exception's message as one line (numba's typing errors run to dozens of lines)."""
+    lines = str(exc).strip().splitlines()
+    return lines[0].strip() if lines else type(exc).__name__
+
+
 def _import_numba() -> Any:
     """The numba module, imported once; None (with one warning) when it cannot be."""
     if "module" not in _numba:
@@ -44,7 +50,9 @@ def _import_numba() -> Any:
         except Exception as exc:  # an ImportError, or llvmlite failing to load on this platform
             _numba["module"] = None
             warnings.warn(
-                f"compiled kernels unavailable ({exc}); running the numpy references", RuntimeWarning, 2
+                f"compiled kernels unavailable ({_first_line(exc)}); running the numpy references",
+                RuntimeWarning,
+                2,
             )
         else:
             _numba["module"] = numba
@@ -78,7 +86,9 @@ class Kernel:
             self._failed = True
             name = getattr(self.fn, "__name__", "kernel")
             warnings.warn(
-                f"kernel {name} did not compile ({exc}); running its numpy reference", RuntimeWarning, 2
+                f"kernel {name} did not compile ({_first_line(exc)}); running its numpy reference",
+                RuntimeWarning,
+                2,
             )
             return False
         return True

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import sys
+import warnings
+
 # every command module registers itself on the app when imported (one line each)
 from lfdfuse.cli import (
     drive,  # noqa: F401
@@ -22,6 +25,23 @@ from lfdfuse.cli.app import app, finish
 finish(app)  # every command's help from its docstring, readable at any width
 
 __all__ = ["app", "main"]
+
+
+def show_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: object = None,
+    line: str | None = None,
+) -> None:
+    """A warning as one line on stderr, ``warning: <message>`` (not Python's two-line report with
+    a source path): e.g. a compiled kernel that could not compile, its numpy reference running."""
+    sys.stderr.write(f"warning: {' '.join(str(message).split())}\n")
+
+
+# the CLI's own warnings format, for every command (the console script runs `app` directly)
+warnings.showwarning = show_warning
 
 
 def main() -> None:

@@ -5,8 +5,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from lfdfuse.control.command import DriveParams
 from lfdfuse.robot.pose import Pose
 from lfdfuse.world.raycast import RayCaster
@@ -33,8 +31,9 @@ def move(pose: Pose, v: float, omega: float, *, params: RobotParams, caster: Ray
     robot never passes through a wall.
     """
     d = params.drive
-    v = float(np.clip(v, -d.v_max_mps, d.v_max_mps))
-    omega = float(np.clip(omega, -d.omega_max_rps, d.omega_max_rps))
+    # min/max: np.clip's value, without its cost on a scalar
+    v = float(min(max(v, -d.v_max_mps), d.v_max_mps))
+    omega = float(min(max(omega, -d.omega_max_rps), d.omega_max_rps))
     dt = params.dt_s
     mid = pose.theta + 0.5 * omega * dt
     theta = wrap_angle(pose.theta + omega * dt)

@@ -75,7 +75,7 @@ class Sensors:
         self.world = world
         self.params = params
         rng = max(params.laser.max_range_m, params.sonar.max_range_m, params.camera.max_range_m)
-        self.caster = caster if caster is not None else RayCaster(world.segments, max_range_m=rng)
+        self.caster = caster if caster is not None else RayCaster.shared(world.segments, max_range_m=rng)
         self._laser_angles = params.laser.geometry.angles
         self._sonar_angles = params.sonar.geometry.angles
 

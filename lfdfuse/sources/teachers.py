@@ -142,6 +142,12 @@ class StyleTeacher:
                 world.target(leg.target)  # raises naming the missing target
         self.world, self.legs, self.planner = world, legs, planner
         self.geometry, self.camera, self.drive = geometry, camera, drive
+        self._angles = geometry.angles  # computed once, read every tick
+        #: per side (+1 left, −1 right), the beams the wall-follower reads the wall on
+        self._side_beams = {
+            side: (side * self._angles > math.radians(15)) & (side * self._angles <= math.pi / 2 + 1e-9)
+            for side in (1.0, -1.0)
+        }
         self.rng, self.p = rng, params
         self.safety = SafetyParams()
         self.leg_index = 0
@@ -261,14 +267,14 @@ class StyleTeacher:
 
     def _safe(self, rel: float, reading: Reading) -> float:
         """The free direction nearest ``rel``: a person does not drive into a wall."""
-        return free_heading(rel, reading.ranges_m, self.geometry.angles, self.safety)
+        return free_heading(rel, reading.ranges_m, self._angles, self.safety)
 
     def _wall_follow(self, reading: Reading, side: float) -> float:
         """Heading along the wall on ``side`` (+1 left, −1 right) at the style's distance."""
         p = self.p
-        a = self.geometry.angles
+        a = self._angles
         r = reading.ranges_m
-        sel = (side * a > math.radians(15)) & (side * a <= math.pi / 2 + 1e-9)
+        sel = self._side_beams[side]
         if not sel.any():
             return 0.0
         rs, as_ = r[sel], a[sel]
@@ -277,9 +283,8 @@ class StyleTeacher:
             return side * math.radians(50)  # the wall ends: turn into the opening
         tangent = float(as_[k]) - side * math.pi / 2  # along the wall, forward
         err = float(rs[k]) - p.wall_distance_m  # > 0: too far, turn toward the wall
-        return tangent + side * float(
-            np.clip(p.lateral_gain * err, -p.max_correction_rad, p.max_correction_rad)
-        )
+        # min/max: np.clip's value, without its cost on a scalar
+        return tangent + side * min(max(p.lateral_gain * err, -p.max_correction_rad), p.max_correction_rad)
 
     def _lateral(self, reading: Reading, style: str) -> float:
         p = self.p

@@ -18,12 +18,18 @@ segments × reach², never cells × segments.
 
 from __future__ import annotations
 
+import hashlib
 import math
-from collections.abc import Iterator
+import threading
+from collections import OrderedDict
 
 import numpy as np
 
-_EPS = 1e-12
+from lfdfuse.world import raycast_kernel as _k
+from lfdfuse.world.segments import _EPS, _collinear, _point_segment_distance, _warm, intersect, near_pairs
+
+__all__ = ["RayCaster", "intersect", "near_pairs"]
+
 _TWO_PI = 2.0 * math.pi
 #: sizes of the candidate bands, nearest first; the last band takes all the rest
 _BANDS = (384, 3072)
@@ -33,115 +39,14 @@ _SECTORS = 256
 _CULL_MIN = 64
 #: cached per-cell band arrays, cleared when it grows past this many cells
 _CACHE_CELLS = 4096
-#: most (segment, cell) pairs examined at once while building the index
-_BUILD_CHUNK = 1_000_000
+#: cached per-cell sector lists of the compiled cast, cleared when they grow past this many entries
+_CACHE_ENTRIES = 16_000_000
+#: casters kept by :meth:`RayCaster.shared` (their index is the costly part of a run's setup)
+_SHARED_KEPT = 2
 #: most grid cells; a larger world gets larger cells
 _MAX_CELLS = 4_000_000
 #: most (segment, cell) pairs the index may examine; more segments get larger cells
 _MAX_PAIRS = 12_000_000
-
-
-def _point_segment_distance(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> np.ndarray:
-    """Distances ``(P, S)`` from points ``(P,)`` to segments ``(S, 4)``."""
-    ax, ay, bx, by = (seg[:, i][None, :] for i in range(4))
-    ex, ey = bx - ax, by - ay
-    ll = ex * ex + ey * ey
-    t = ((px[:, None] - ax) * ex + (py[:, None] - ay) * ey) / np.where(ll > 0, ll, 1.0)
-    t = np.clip(t, 0.0, 1.0)
-    dx = ax + t * ex - px[:, None]
-    dy = ay + t * ey - py[:, None]
-    return np.asarray(np.sqrt(dx * dx + dy * dy))
-
-
-def _pair_distance(px: np.ndarray, py: np.ndarray, seg: np.ndarray) -> np.ndarray:
-    """Distances ``(N,)`` from points ``(N,)`` to segments ``(N, 4)``, pair by pair.
-
-    The same operations as :func:`_point_segment_distance`, so the same values.
-    """
-    ax, ay, bx, by = seg[:, 0], seg[:, 1], seg[:, 2], seg[:, 3]
-    ex, ey = bx - ax, by - ay
-    ll = ex * ex + ey * ey
-    t = np.clip(((px - ax) * ex + (py - ay) * ey) / np.where(ll > 0, ll, 1.0), 0.0, 1.0)
-    dx = ax + t * ex - px
-    dy = ay + t * ey - py
-    return np.asarray(np.sqrt(dx * dx + dy * dy))
-
-
-def near_pairs(
-    segments: np.ndarray, *, x0: float, y0: float, cell_m: float, nx: int, ny: int, reach_m: float
-) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
-    """Every (segment, cell) pair of a grid whose cell centre is within ``reach_m`` of the segment.
-
-    The grid has ``nx × ny`` cells of ``cell_m`` from ``(x0, y0)``; cell ``(i, j)`` has its centre
-    at ``(x0 + (i + ½)·cell_m, y0 + (j + ½)·cell_m)``. Yields chunks ``(segment ids, i, j,
-    distance m)``, each ``(N,)``. Work grows with segments × (reach / cell)², not with cells ×
-    segments.
-    """
-    seg = np.asarray(segments, dtype=np.float64).reshape(-1, 4)
-    n_seg = len(seg)
-    i0 = np.ceil((np.minimum(seg[:, 0], seg[:, 2]) - reach_m - x0) / cell_m - 0.5)
-    i1 = np.floor((np.maximum(seg[:, 0], seg[:, 2]) + reach_m - x0) / cell_m - 0.5)
-    j0 = np.ceil((np.minimum(seg[:, 1], seg[:, 3]) - reach_m - y0) / cell_m - 0.5)
-    j1 = np.floor((np.maximum(seg[:, 1], seg[:, 3]) + reach_m - y0) / cell_m - 0.5)
-    i0, i1 = np.clip(i0, 0, nx).astype(np.int64), np.clip(i1, -1, nx - 1).astype(np.int64)
-    j0, j1 = np.clip(j0, 0, ny).astype(np.int64), np.clip(j1, -1, ny - 1).astype(np.int64)
-    nj = np.maximum(j1 - j0 + 1, 0)
-    count = np.maximum(i1 - i0 + 1, 0) * nj
-    ends = np.cumsum(count)
-    start = 0
-    while start < n_seg:
-        done_before = int(ends[start - 1]) if start else 0
-        stop = max(start + 1, int(np.searchsorted(ends, done_before + _BUILD_CHUNK, "right")))
-        cnt = count[start:stop]
-        s = np.repeat(np.arange(start, stop), cnt)
-        local = np.arange(int(cnt.sum())) - np.repeat(np.cumsum(cnt) - cnt, cnt)
-        ci = i0[s] + local // nj[s]
-        cj = j0[s] + local % nj[s]
-        d = _pair_distance(x0 + (ci + 0.5) * cell_m, y0 + (cj + 0.5) * cell_m, seg[s])
-        keep = d <= reach_m
-        yield s[keep], ci[keep], cj[keep], d[keep]
-        start = stop
-
-
-def intersect(ox: np.ndarray, oy: np.ndarray, dx: np.ndarray, dy: np.ndarray, seg: np.ndarray) -> np.ndarray:
-    """Ray parameters ``(R, S)`` at which rays hit segments; ``inf`` where they miss.
-
-    Rays are ``o + t·d`` with unit ``d``, so ``t`` is a distance in metres. Arrays ``ox, oy,
-    dx, dy`` have shape ``(R,)``; ``seg`` has shape ``(S, 4)``.
-    """
-    ax, ay = seg[:, 0][None, :], seg[:, 1][None, :]
-    ex, ey = (seg[:, 2] - seg[:, 0])[None, :], (seg[:, 3] - seg[:, 1])[None, :]
-    dxc, dyc = dx[:, None], dy[:, None]
-    denom = dxc * ey - dyc * ex
-    wx, wy = ax - ox[:, None], ay - oy[:, None]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv = 1.0 / denom
-        t = (wx * ey - wy * ex) * inv
-        u = (wx * dyc - wy * dxc) * inv
-    parallel = np.abs(denom) <= _EPS
-    hit = ~parallel & (t >= 0.0) & (u >= -1e-12) & (u <= 1.0 + 1e-12)
-    out = np.where(hit, t, np.inf)
-    if parallel.any():
-        out = np.where(parallel, _collinear(wx, wy, ex, ey, dxc, dyc, out), out)
-    return out
-
-
-def _collinear(
-    wx: np.ndarray,
-    wy: np.ndarray,
-    ex: np.ndarray,
-    ey: np.ndarray,
-    dx: np.ndarray,
-    dy: np.ndarray,
-    out: np.ndarray,
-) -> np.ndarray:
-    """For parallel ray/segment pairs: a beam along a wall hits the nearest point ahead of it."""
-    collinear = np.abs(wx * dy - wy * dx) <= 1e-9
-    ta = wx * dx + wy * dy
-    tb = (wx + ex) * dx + (wy + ey) * dy
-    inside = (ta <= 0.0) & (tb >= 0.0) | (tb <= 0.0) & (ta >= 0.0)
-    ahead = np.where(np.minimum(ta, tb) >= 0.0, np.minimum(ta, tb), np.inf)
-    return np.where(collinear, np.where(inside, 0.0, ahead), out)
 
 
 class _Band:
@@ -238,6 +143,30 @@ class RayCaster:
         self._build_index()
         self._all = [_Band(self.segments, math.inf)]
         self._cache: dict[int, list[_Band]] = {}
+        self._sector_cache: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._sector_entries = 0
+
+    _shared: OrderedDict[tuple[bytes, float, float], RayCaster] = OrderedDict()
+    _shared_lock = threading.Lock()
+
+    @classmethod
+    def shared(cls, segments: np.ndarray, *, max_range_m: float = 8.0, cell_m: float = 1.0) -> RayCaster:
+        """A caster of these segments, built once per process for the last few maps: every run
+        in a world (each start of ``execute``, each test) casts on the same index. Casting has no
+        state that changes a result, so a shared caster answers as a new one would."""
+        seg = np.ascontiguousarray(segments, dtype=np.float64).reshape(-1, 4)
+        key = (hashlib.blake2b(seg.tobytes(), digest_size=20).digest(), float(max_range_m), float(cell_m))
+        with cls._shared_lock:
+            rc = cls._shared.get(key)
+            if rc is not None:
+                cls._shared.move_to_end(key)
+                return rc
+        rc = cls(seg, max_range_m=max_range_m, cell_m=cell_m)
+        with cls._shared_lock:
+            cls._shared[key] = rc
+            while len(cls._shared) > _SHARED_KEPT:
+                cls._shared.popitem(last=False)
+        return rc
 
     def _build_index(self) -> None:
         """Per cell, the segments within max range + half diagonal of its centre, nearest first.
@@ -266,6 +195,45 @@ class RayCaster:
         self._lower_um = (key & q_max).astype(np.uint32)
         cells = key >> 32
         self._offsets = np.searchsorted(cells, np.arange(self.nx * self.ny + 1)).astype(np.int64)
+        # the bounds in metres, as the bands' cuts read them; outside the grid: every segment
+        self._lower_m = self._lower_um.astype(np.float64) * 1e-6
+        self._all_ids = np.arange(len(self.segments), dtype=np.int32)
+        self._all_lower = np.zeros(len(self.segments))
+
+    def _cell(self, x: float, y: float) -> int:
+        """The grid cell holding ``(x, y)``, or -1 outside the grid."""
+        i = int((x - self.x0) // self.cell_m)
+        j = int((y - self.y0) // self.cell_m)
+        return i * self.ny + j if 0 <= i < self.nx and 0 <= j < self.ny else -1
+
+    def _candidates(self, c: int) -> tuple[np.ndarray, np.ndarray]:
+        """The sorted candidate ids of cell ``c`` (every segment for -1) and their lower bounds (m)."""
+        if c < 0:
+            return self._all_ids, self._all_lower
+        lo, hi = int(self._offsets[c]), int(self._offsets[c + 1])
+        return self._index[lo:hi], self._lower_m[lo:hi]
+
+    def _sector_lists(self, c: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Cell ``c``'s candidates for the compiled cast, cached: ``cand`` ``(K, 5)`` nearest first
+        as ``[ax, ay, bx − ax, by − ay, lower bound m]``, and per angular sector of the directions
+        that can reach them from inside the cell, their positions in ``cand`` (``starts``
+        ``(_SECTORS + 1,)`` into ``entries``)."""
+        got = self._sector_cache.get(c)
+        if got is None:
+            ids, lower = self._candidates(c)
+            seg = self.segments[ids]
+            i, j = divmod(c, self.ny)
+            centre = (self.x0 + (i + 0.5) * self.cell_m, self.y0 + (j + 0.5) * self.cell_m)
+            bins = _sector_bins(seg, *centre, self.cell_m * math.sqrt(0.5))
+            cand = np.column_stack([seg[:, :2], seg[:, 2:] - seg[:, :2], lower])
+            starts = np.empty(_SECTORS + 1, np.int64)
+            got = (cand, starts, _k.sector_lists(bins, _SECTORS, starts))
+            if self._sector_entries + len(got[2]) + len(ids) > _CACHE_ENTRIES:
+                self._sector_cache.clear()
+                self._sector_entries = 0
+            self._sector_cache[c] = got
+            self._sector_entries += len(got[2]) + len(ids)
+        return got
 
     def _bands(self, x: float, y: float) -> list[_Band]:
         """The candidate bands of the cell holding ``(x, y)`` (all segments outside the grid)."""
@@ -304,7 +272,31 @@ class RayCaster:
         return np.concatenate([b.seg for b in bands]) if bands else np.zeros((0, 4))
 
     def cast(self, x: float, y: float, angles_rad: np.ndarray) -> np.ndarray:
-        """Ranges ``(B,)`` in metres along world-frame ``angles_rad`` ``(B,)``; no return = max range."""
+        """Ranges ``(B,)`` in metres along world-frame ``angles_rad`` ``(B,)``; no return = max range.
+
+        The compiled loop (:mod:`lfdfuse.world.raycast_kernel`) when it is ready (and the
+        process has made its first ``segments._WARMUP_CALLS`` calls), else :meth:`cast_reference`: the
+        same values.
+        """
+        if _warm() and _k.cast_sectors_loop.ready():
+            c = self._cell(x, y)
+            got = self._sector_cache.get(c)
+            if got is None and c >= 0 and _k.sector_lists.ready():
+                got = self._sector_lists(c)
+            if got is not None or c < 0 and _k.cast_loop.ready():
+                angles = np.asarray(angles_rad, dtype=np.float64).reshape(-1)
+                out = np.empty(angles.shape)
+                dx, dy = np.cos(angles), np.sin(angles)
+                if got is None:
+                    ids, lower, r = self._all_ids, self._all_lower, self.max_range_m
+                    _k.cast_loop(self.segments, ids, lower, x, y, dx, dy, r, out)
+                else:
+                    _k.cast_sectors_loop(*got, x, y, angles, dx, dy, self.max_range_m, out)
+                return out
+        return self.cast_reference(x, y, angles_rad)
+
+    def cast_reference(self, x: float, y: float, angles_rad: np.ndarray) -> np.ndarray:
+        """:meth:`cast` in numpy, band by band: the reference the compiled loop is tested against."""
         angles = np.asarray(angles_rad, dtype=np.float64).reshape(-1)
         best = np.full(angles.shape, np.inf)
         if len(angles) == 0:
@@ -323,7 +315,10 @@ class RayCaster:
             active = active[best[active] > band.cut_m]
             if len(active) == 0:
                 break
-        return np.asarray(np.minimum(best, self.max_range_m, out=best))
+        np.minimum(best, self.max_range_m, out=best)
+        # a range of zero (the origin on a wall) is +0.0 whichever of ±0 the order of hits kept
+        best += 0.0
+        return best
 
     @staticmethod
     def _facing(band: _Band, phi: np.ndarray) -> _Band:
@@ -391,6 +386,13 @@ class RayCaster:
 
     def clearance(self, x: float, y: float) -> float:
         """Distance (m) from a point to the nearest segment, or max range if none is nearer."""
+        if _warm() and _k.clearance_loop.ready():
+            ids, lower = self._candidates(self._cell(x, y))
+            return float(_k.clearance_loop(self.segments, ids, lower, x, y, self.max_range_m))
+        return self.clearance_reference(x, y)
+
+    def clearance_reference(self, x: float, y: float) -> float:
+        """:meth:`clearance` in numpy, band by band."""
         best = math.inf
         px, py = np.array([x]), np.array([y])
         for band in self._bands(x, y):
@@ -402,6 +404,17 @@ class RayCaster:
 
     def visible(self, x0: float, y0: float, x1: float, y1: float) -> bool:
         """True when the straight line between two points crosses no segment."""
+        dx, dy = x1 - x0, y1 - y0
+        dist = math.hypot(dx, dy)
+        if dist == 0.0:
+            return True
+        if _warm() and _k.blocked_loop.ready():
+            ids, lower = self._candidates(self._cell(x0, y0) if dist <= self.max_range_m else -1)
+            return not _k.blocked_loop(self.segments, ids, lower, x0, y0, dx / dist, dy / dist, dist)
+        return self.visible_reference(x0, y0, x1, y1)
+
+    def visible_reference(self, x0: float, y0: float, x1: float, y1: float) -> bool:
+        """:meth:`visible` in numpy, band by band."""
         dx, dy = x1 - x0, y1 - y0
         dist = math.hypot(dx, dy)
         if dist == 0.0:

@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 
 from lfdfuse.errors import LogError
 from lfdfuse.log import messages as msg
+from lfdfuse.log import writer
 from lfdfuse.log.reader import file_info, iter_messages, iter_raw
 from lfdfuse.log.writer import PROVENANCE, LogWriter
 
@@ -92,3 +93,47 @@ def test_a_writer_interrupted_as_it_opens_leaves_no_temp_file(
     with pytest.raises(interrupt), LogWriter(tmp_path / "run.mcap", metadata={}):
         pass
     assert list(tmp_path.iterdir()) == []
+
+
+def _two_ways(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, messages: list[tuple[str, int, bytes]]
+) -> None:
+    """The one-step message path writes the bytes mcap's public ``add_message`` writes."""
+    files = []
+    for fast in (True, False):
+        if not fast:
+            monkeypatch.setattr(writer._Messages, "of", classmethod(lambda cls, w: None))
+        path = tmp_path / f"{fast}.mcap"
+        with LogWriter(path, metadata={"seed": "1"}) as log:
+            assert (log._messages is not None) == fast
+            for topic, t, data in messages:
+                log.write_raw(topic, t, data)
+        files.append(path.read_bytes())
+    assert files[0] == files[1]
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(
+    st.lists(
+        st.tuples(
+            st.sampled_from(["/cmd_vel", "/scan", "/pose"]), st.integers(0, 2**63 - 1), st.binary(max_size=60)
+        ),
+        max_size=40,
+    )
+)
+def test_messages_are_written_as_mcap_writes_them(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, messages: list[tuple[str, int, bytes]]
+) -> None:
+    with monkeypatch.context() as m:
+        _two_ways(tmp_path, m, messages)
+
+
+def test_messages_across_chunks_are_written_as_mcap_writes_them(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # more than one 4 MiB chunk, times out of order
+    blob = bytes(range(256)) * 40
+    messages = [
+        ("/scan" if k % 3 else "/pose", (k * 7919) % 5000, blob[: (k * 3) % 10_000]) for k in range(2500)
+    ]
+    _two_ways(tmp_path, monkeypatch, messages)

@@ -14,12 +14,19 @@ import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse.world import raycast
+from lfdfuse.world import raycast, segments
 from lfdfuse.world.model import load_world
-from lfdfuse.world.raycast import RayCaster, _point_segment_distance, intersect, near_pairs
+from lfdfuse.world.raycast import RayCaster
+from lfdfuse.world.segments import _point_segment_distance, intersect, near_pairs
 from tests.conftest import SHARED
 
 MAPS = SHARED / "realdata" / "maps"
+
+
+@pytest.fixture(autouse=True)
+def _compiled_from_the_first_call(monkeypatch: pytest.MonkeyPatch) -> None:
+    # cast() runs the compiled loops at once (cast_reference() the numpy bands): both are checked
+    monkeypatch.setattr(segments, "_WARMUP_CALLS", 0)
 
 
 def brute_cast(seg: np.ndarray, x: float, y: float, angles: np.ndarray, max_range: float) -> np.ndarray:
@@ -61,11 +68,17 @@ def check_agrees(
     for _ in range(poses):
         x, y = rng.uniform(lo, hi)
         th = rng.uniform(-math.pi, math.pi)
-        got = rc.cast(x, y, beams + th)
-        assert np.array_equal(got, brute_cast(seg, x, y, beams + th, rc.max_range_m))
-        assert rc.clearance(x, y) == brute_clearance(seg, x, y, rc.max_range_m)
+        want = brute_cast(seg, x, y, beams + th, rc.max_range_m)
+        # the compiled caster and its numpy reference
+        assert np.array_equal(rc.cast(x, y, beams + th), want)
+        assert np.array_equal(rc.cast_reference(x, y, beams + th), want)
+        assert (
+            rc.clearance(x, y) == rc.clearance_reference(x, y) == brute_clearance(seg, x, y, rc.max_range_m)
+        )
         x1, y1 = x + rng.uniform(-9, 9), y + rng.uniform(-9, 9)
-        assert rc.visible(x, y, x1, y1) == brute_visible(seg, x, y, x1, y1)
+        assert (
+            rc.visible(x, y, x1, y1) == rc.visible_reference(x, y, x1, y1) == brute_visible(seg, x, y, x1, y1)
+        )
 
 
 @pytest.mark.parametrize(("n", "cell"), [(4, 1.0), (200, 1.0), (1000, 0.7), (6000, 1.0), (6000, 2.5)])
@@ -126,9 +139,11 @@ def test_degenerate_maps_agree_exactly_with_brute_force(
         x, y = float(seg[pick % len(seg), 0]), float(seg[pick % len(seg), 1])
     rc = RayCaster(seg, max_range_m=max_range, cell_m=cell)
     a = np.array(angles)
-    assert np.array_equal(rc.cast(x, y, a), brute_cast(seg, x, y, a, max_range))
-    assert rc.clearance(x, y) == brute_clearance(seg, x, y, max_range)
-    assert rc.visible(x, y, x + 1.5, y - 0.5) == brute_visible(seg, x, y, x + 1.5, y - 0.5)
+    want = brute_cast(seg, x, y, a, max_range)
+    assert np.array_equal(rc.cast(x, y, a), want) and np.array_equal(rc.cast_reference(x, y, a), want)
+    assert rc.clearance(x, y) == rc.clearance_reference(x, y) == brute_clearance(seg, x, y, max_range)
+    seen = brute_visible(seg, x, y, x + 1.5, y - 0.5)
+    assert rc.visible(x, y, x + 1.5, y - 0.5) == rc.visible_reference(x, y, x + 1.5, y - 0.5) == seen
 
 
 def test_no_walls_and_no_beams() -> None:
