@@ -20,8 +20,9 @@ but ``steady`` (the ``--keys`` person above) teaches
   into both tee junctions: the branch taken must be the style's.
 
 Each zoo row also counts the person's own demos that completed the task (``demos``): a person
-whose demo fails is no fair judge of the learner. The zoo's person models and the learner were
-tuned on seeds :data:`TUNING_SEEDS`; the bench measures on :data:`ZOO_SEEDS`, never tuned on.
+whose demo fails is no fair judge of the learner (a demo completes when it reaches red, green,
+blue in order without a collision). The zoo's person models were looked at on seeds
+:data:`TUNING_SEEDS`; the bench measures on :data:`ZOO_SEEDS`, never tuned on.
 ``LFDFUSE_ZOO_SEEDS=11,12`` (and ``LFDFUSE_ZOO_PERSONS=late,coarse``) run the zoo alone on other
 seeds (persons).
 

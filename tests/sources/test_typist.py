@@ -162,6 +162,8 @@ def test_the_zoo_spans_the_documented_ranges() -> None:
     assert min(p.reaction_s for p in ps) == 0.0 and max(p.reaction_s for p in ps) == 0.6
     assert {p.choice for p in ps} == set(CHOICES)
     assert any(p.lapse > 0 for p in ps) and any(p.stop_go > 0 for p in ps) and any(p.corner_m > 0 for p in ps)
+    # every person but steady sees the robot's own turn and does not hold a key into a wall
+    assert all(p.sees_turn and p.reflex_m > 0 for name, p in PERSONS.items() if name != "steady")
 
 
 @pytest.mark.parametrize("name", ["prompt", "steady", "late"])
@@ -220,7 +222,10 @@ def test_simulate_person_is_recorded_and_steady_keys_are_not(tmp_path: Path) -> 
         ("keys", ["--keys", "0.5"]),
         ("sloppy", ["--person", "sloppy"]),
         ("sloppy2", ["--person", "sloppy"]),
-        ("custom", ["--keys", "0.9", "--reaction", "0.4", "--thresholds", "25,70"]),
+        (
+            "custom",
+            ["--keys", "0.9", "--reaction", "0.4", "--thresholds", "25,70", "--reflex", "0.3", "--sees-turn"],
+        ),
     ]:
         out = tmp_path / f"{name}.mcap"
         res = runner.invoke(app, base + extra + ["-o", str(out)])
@@ -233,6 +238,7 @@ def test_simulate_person_is_recorded_and_steady_keys_are_not(tmp_path: Path) -> 
     assert outs["custom"]["person"] == "custom" and outs["custom"]["input"] == "keys:0.9"
     model = outs["custom"]["person_model"]
     assert "choice='thresholds'" in model and "arc_deg=25.0" in model and "reaction_s=0.4" in model
+    assert "reflex_m=0.3" in model and "sees_turn=True" in model
 
 
 @pytest.mark.parametrize(
