@@ -126,6 +126,21 @@ def simulate_cmd(
         help="Person: cut corners, aiming this many metres farther along the route.",
         rich_help_panel="Person at a keyboard",
     ),
+    reflex: float | None = typer.Option(
+        None,
+        "--reflex",
+        min=0.0,
+        max=5.0,
+        callback=finite,
+        help="Person: never hold a key driving into a wall this many metres ahead (0: no reflex; the zoo's 0.5).",
+        rich_help_panel="Person at a keyboard",
+    ),
+    sees_turn: bool | None = typer.Option(
+        None,
+        "--sees-turn/--blind-turn",
+        help="Person: a late key allows for how far the robot turned since (the zoo's persons do).",
+        rich_help_panel="Person at a keyboard",
+    ),
     out: Path = typer.Option(Path("demo.mcap"), "--out", "-o", help="Output MCAP file."),
 ) -> None:
     """Drive a scripted teacher in a world and record the demonstration as MCAP.
@@ -158,6 +173,8 @@ def simulate_cmd(
         stop_go=stop_go,
         pause=pause,
         corner_cut=corner_cut,
+        reflex=reflex,
+        sees_turn=sees_turn,
     )
     if isinstance(spec, NetworkTeacher):
         if keys is not None or model is not None:
@@ -207,6 +224,8 @@ def person_model(
     stop_go: float | None,
     pause: float | None,
     corner_cut: float | None,
+    reflex: float | None = None,
+    sees_turn: bool | None = None,
 ) -> tuple[str, KeyboardParams] | None:
     """The person the options name and set (its name, ``custom`` when only set), or None when
     none of them is given (``--keys`` alone keeps its own person)."""
@@ -217,6 +236,8 @@ def person_model(
         "stop_go": stop_go,
         "pause_s": pause,
         "corner_m": corner_cut,
+        "reflex_m": reflex,
+        "sees_turn": sees_turn,
     }
     changes: dict[str, Any] = {k: v for k, v in given.items() if v is not None}
     if thresholds is not None:

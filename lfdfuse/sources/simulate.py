@@ -90,6 +90,7 @@ def simulate(opts: SimulateOptions, *, out: str | Path, progress: Progress | Non
             dt_s=opts.robot.dt_s,
             rng=np.random.default_rng([opts.seed, 19]),  # its own stream: the teacher's is unchanged
             params=person,
+            beam_angles_rad=params.laser.geometry.angles,
         )
         extra = {"input": f"keys:{person.period_s!r}"}
         if opts.person is not None:

@@ -114,11 +114,26 @@ class _Wants:
         return float(v), float(w)
 
 
-def _drive(person: KeyboardPerson, ticks: int) -> list[tuple[int, str]]:
-    """Every press ``(tick, key)`` of ``ticks`` control periods."""
+#: the laser of :func:`_drive`'s scenes: a beam every degree all around
+BEAMS = np.radians(np.arange(-180.0, 180.0, 1.0))
+OPEN = np.full(len(BEAMS), 10.0)
+
+
+def _drive(
+    person: KeyboardPerson,
+    ticks: int,
+    *,
+    theta: Callable[[int], float] = lambda k: 0.0,
+    ranges: Callable[[int], np.ndarray] = lambda k: OPEN,
+) -> list[tuple[int, str]]:
+    """Every press ``(tick, key)`` of ``ticks`` control periods, the robot heading ``theta(k)``
+    and its laser reading ``ranges(k)`` at tick k (open all around by default)."""
     out = []
     for k in range(ticks):
-        person.command(SimpleNamespace(k=k))  # type: ignore[arg-type]
+        obs = SimpleNamespace(
+            k=k, pose=SimpleNamespace(theta=theta(k)), reading=SimpleNamespace(ranges_m=ranges(k))
+        )
+        person.command(obs)  # type: ignore[arg-type]
         out += [(t, inp.text) for t, inp, _cmd in person.presses]
         person.presses.clear()
     return out
@@ -127,7 +142,12 @@ def _drive(person: KeyboardPerson, ticks: int) -> list[tuple[int, str]]:
 def _person(heading: Callable[[int], float], params: KeyboardParams, seed: int = 0) -> KeyboardPerson:
     drive = DriveParams()
     return KeyboardPerson(
-        _Wants(heading, drive), drive=drive, dt_s=0.1, rng=np.random.default_rng(seed), params=params
+        _Wants(heading, drive),
+        drive=drive,
+        dt_s=0.1,
+        rng=np.random.default_rng(seed),
+        params=params,
+        beam_angles_rad=BEAMS,
     )
 
 
@@ -142,6 +162,8 @@ def test_the_zoo_spans_the_documented_ranges() -> None:
     assert min(p.reaction_s for p in ps) == 0.0 and max(p.reaction_s for p in ps) == 0.6
     assert {p.choice for p in ps} == set(CHOICES)
     assert any(p.lapse > 0 for p in ps) and any(p.stop_go > 0 for p in ps) and any(p.corner_m > 0 for p in ps)
+    # every person but steady sees the robot's own turn and does not hold a key into a wall
+    assert all(p.sees_turn and p.reflex_m > 0 for name, p in PERSONS.items() if name != "steady")
 
 
 @pytest.mark.parametrize("name", ["prompt", "steady", "late"])
@@ -200,7 +222,10 @@ def test_simulate_person_is_recorded_and_steady_keys_are_not(tmp_path: Path) -> 
         ("keys", ["--keys", "0.5"]),
         ("sloppy", ["--person", "sloppy"]),
         ("sloppy2", ["--person", "sloppy"]),
-        ("custom", ["--keys", "0.9", "--reaction", "0.4", "--thresholds", "25,70"]),
+        (
+            "custom",
+            ["--keys", "0.9", "--reaction", "0.4", "--thresholds", "25,70", "--reflex", "0.3", "--sees-turn"],
+        ),
     ]:
         out = tmp_path / f"{name}.mcap"
         res = runner.invoke(app, base + extra + ["-o", str(out)])
@@ -213,6 +238,7 @@ def test_simulate_person_is_recorded_and_steady_keys_are_not(tmp_path: Path) -> 
     assert outs["custom"]["person"] == "custom" and outs["custom"]["input"] == "keys:0.9"
     model = outs["custom"]["person_model"]
     assert "choice='thresholds'" in model and "arc_deg=25.0" in model and "reaction_s=0.4" in model
+    assert "reflex_m=0.3" in model and "sees_turn=True" in model
 
 
 @pytest.mark.parametrize(
@@ -224,3 +250,32 @@ def test_a_bad_person_is_a_clean_error(tmp_path: Path, extra: list[str]) -> None
     assert res.exit_code == 1, res.output
     assert res.output.strip().startswith("error:"), res.output
     assert not (tmp_path / "x.mcap").exists()
+
+
+def test_a_person_who_sees_the_turn_does_not_overshoot_it() -> None:
+    """The robot turns from 0 to 1 rad over the first 10 ticks toward a direction 1 rad to the
+    left, then holds it: the teacher wants ``1 − θ``. A person reacting 0.6 s late sees at tick 12
+    the want of tick 6 (0.4 rad: an arc); one who sees the robot's turn since allows for the
+    0.4 rad turned and drives straight, as the teacher now wants."""
+    theta = lambda k: min(0.1 * k, 1.0)  # noqa: E731
+    want = lambda k: 1.0 - theta(k)  # noqa: E731
+    late = replace(KeyboardParams(), jitter=0.0, period_s=0.1, reaction_s=0.6)
+    blind = dict(_drive(_person(want, late), 20, theta=theta))
+    seeing = dict(_drive(_person(want, replace(late, sees_turn=True)), 20, theta=theta))
+    assert [blind[k] for k in (11, 12)] == ["u"] * 2, blind
+    assert all(seeing[k] == "i" for k in range(11, 20) if k in seeing), seeing
+
+
+def test_a_person_with_a_reflex_never_holds_a_key_into_a_wall() -> None:
+    """Wanting straight ahead, a wall appears 0.4 m ahead at tick 20: a person with a 0.5 m
+    reflex who looks only every 1.5 s takes the hand off ``i`` at once (a turn in place, the
+    only keys that do not drive into it) and never presses ``i`` while the wall is there;
+    without the reflex ``i`` is held into the wall until the next look."""
+    wall = np.where(np.abs(BEAMS) < math.radians(80), 0.4 / np.cos(np.clip(BEAMS, -1.39, 1.39)), 10.0)
+    ranges = lambda k: OPEN if k < 20 else wall  # noqa: E731
+    base = replace(KeyboardParams(), jitter=0.0, period_s=1.5, reaction_s=0.0)
+    careful = _drive(_person(lambda k: 0.0, replace(base, reflex_m=0.5)), 60, ranges=ranges)
+    careless = _drive(_person(lambda k: 0.0, base), 60, ranges=ranges)
+    assert careful[:2] == [(0, "i"), (15, "i")] and careful[2] == (20, "j"), careful
+    assert all(key in ("j", "l") for t, key in careful if t >= 20), careful
+    assert (30, "i") in careless and all(t % 15 == 0 for t, _key in careless), careless
