@@ -288,7 +288,13 @@ def test_viz_imports_no_stage() -> None:
 #: the stages of lfdfuse/ (top-level modules and subpackages), bottom floor first (DESIGN §14).
 #: A stage imports only stages on lower floors; stages on one floor know nothing of each other.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("lfdfuse", "errors", "progress", "words", "jit"),  # the package root (its version), the error hierarchy, kernels
+    (
+        "lfdfuse",
+        "errors",
+        "progress",
+        "words",
+        "jit",
+    ),  # the package root (its version), the error hierarchy, kernels
     ("files", "validate", "parallel"),
     ("robot", "control"),  # the types every stage shares and the ROS conversion; vector ↔ command
     ("world",),

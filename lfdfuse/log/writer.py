@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import os
+import struct
 import tempfile
 from pathlib import Path
 from types import TracebackType
 from typing import Any, BinaryIO
 
 import orjson
+from mcap._chunk_builder import ChunkBuilder
+from mcap.records import Message, MessageIndex
 from mcap.writer import CompressionType, Writer
 
 from lfdfuse import __version__
@@ -18,6 +21,47 @@ from lfdfuse.log.messages import PROVENANCE, TOPICS, RawMessage
 from lfdfuse.log.schemas import schema_text
 
 __all__ = ["PROVENANCE", "LogWriter"]
+
+#: a Message record's opcode, length, channel, sequence, log and publish time (MCAP spec)
+_MESSAGE_HEAD = struct.Struct("<BQHIQQ")
+_MESSAGE_OPCODE = 0x05
+
+
+class _ChunkBuilder(ChunkBuilder):
+    """mcap's chunk builder with a message record packed at once, not field by field and
+    length patched afterwards: the same bytes, a third of the time of a log's writing."""
+
+    def add_message(self, message: Message) -> None:
+        if self.num_messages == 0:
+            self.message_start_time = message.log_time
+        else:
+            self.message_start_time = min(self.message_start_time, message.log_time)
+        self.message_end_time = max(self.message_end_time, message.log_time)
+        index = self.message_indices.get(message.channel_id)
+        if not index:
+            index = self.message_indices[message.channel_id] = MessageIndex(message.channel_id, [])
+        buf = self.record_writer._buffer
+        index.records.append((message.log_time, buf.tell()))
+        self.num_messages += 1
+        data = message.data
+        buf.write(
+            _MESSAGE_HEAD.pack(
+                _MESSAGE_OPCODE,
+                22 + len(data),
+                message.channel_id,
+                message.sequence,
+                message.log_time,
+                message.publish_time,
+            )
+        )
+        buf.write(data)
+
+
+def _fast_messages(writer: Writer) -> None:
+    """Give ``writer`` the :class:`_ChunkBuilder` where this mcap version has the builder it
+    replaces (else the writer is left as it is: slower, the same file)."""
+    if type(getattr(writer, "_Writer__chunk_builder", None)) is ChunkBuilder:
+        writer._Writer__chunk_builder = _ChunkBuilder()  # type: ignore[attr-defined]
 
 
 class LogWriter:
@@ -55,6 +99,7 @@ class LogWriter:
         try:
             self._stream = os.fdopen(fd, "wb")
             self._writer = Writer(self._stream, compression=CompressionType.ZSTD, chunk_size=4 * 1024 * 1024)
+            _fast_messages(self._writer)
             self._writer.start(profile="", library=f"lfdfuse {__version__}")
         except BaseException:
             # interrupted here (SIGTERM as the command starts), __exit__ never runs: clean up now

@@ -92,3 +92,40 @@ def test_a_writer_interrupted_as_it_opens_leaves_no_temp_file(
     with pytest.raises(interrupt), LogWriter(tmp_path / "run.mcap", metadata={}):
         pass
     assert list(tmp_path.iterdir()) == []
+
+
+def _write_many(path: Path, rows: list[tuple[str, int, bytes]]) -> bytes:
+    with LogWriter(path, metadata={"seed": "1"}) as log:
+        for topic, t_ns, data in rows:
+            log.write_raw(topic, t_ns, data)
+    return path.read_bytes()
+
+
+@settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(
+    st.lists(
+        st.tuples(
+            st.sampled_from(["/cmd_vel", "/pose", "/scan"]),
+            st.integers(0, 2**63 - 1),
+            st.binary(max_size=300),
+        ),
+        max_size=60,
+    ),
+    st.integers(0, 2**32 - 1),
+)
+def test_the_fast_message_path_writes_the_bytes_mcap_writes(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, rows: list[tuple[str, int, bytes]], big: int
+) -> None:
+    """Messages packed at once (:class:`~lfdfuse.log.writer._ChunkBuilder`) give the file mcap's
+    own builder gives, chunk boundaries included (a 4 MB chunk is crossed)."""
+    import random
+
+    r = random.Random(big)
+    rows = rows + [("/scan", r.randrange(2**40), r.randbytes(300_000)) for _ in range(16)]
+    fast = _write_many(tmp_path / "fast.mcap", rows)
+    with monkeypatch.context() as m:
+        m.setattr("lfdfuse.log.writer._fast_messages", lambda _w: None)
+        plain = _write_many(tmp_path / "plain.mcap", rows)
+    assert fast == plain
+    back = sorted((x.topic, x.log_time_ns, x.data) for x in iter_raw(tmp_path / "fast.mcap"))
+    assert back == sorted(rows)
