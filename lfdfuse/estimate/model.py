@@ -485,7 +485,10 @@ def row_loglik(data: Row, w: np.ndarray, model: FusionModel) -> np.ndarray:
     if isinstance(data, MixedRowData):
         both = row_loglik(data.continuous, w, model) + discrete_log_marginal(data.discrete, w, model)
         return np.asarray(both)
-    return log_marginal(sum_cos(data, w), data.steps, model)
+    stat = sum_cos(data, w)
+    if LOG_MARGINAL.ready():
+        return np.asarray(LOG_MARGINAL(stat, float(data.steps), model.kappas, model._log_norm))
+    return log_marginal(stat, data.steps, model)
 
 
 def log_marginal(s: np.ndarray, steps: np.ndarray | int, model: FusionModel) -> np.ndarray:
@@ -501,6 +504,30 @@ def log_marginal(s: np.ndarray, steps: np.ndarray | int, model: FusionModel) -> 
     terms -= top[..., None]
     np.exp(terms, out=terms)
     return np.asarray(top + np.log(terms.sum(axis=-1)) - math.log(len(k)))
+
+
+def _log_marginal_loop(s: np.ndarray, steps: float, kappas: np.ndarray, log_norm: np.ndarray) -> np.ndarray:
+    """:func:`log_marginal` for ``S (P,)`` of rows of ``steps`` steps, as one loop."""
+    j_count = len(kappas)
+    out = np.empty(len(s))
+    terms = np.empty(j_count)
+    log_j = math.log(j_count)
+    for p in range(len(s)):
+        top = -np.inf
+        for j in range(j_count):
+            x = kappas[j] * (s[p] - steps) - steps * log_norm[j]
+            terms[j] = x
+            if x > top:
+                top = x
+        acc = 0.0
+        for j in range(j_count):
+            acc += math.exp(terms[j] - top)
+        out[p] = top + math.log(acc) - log_j
+    return out
+
+
+#: :func:`_log_marginal_loop`, compiled on first use
+LOG_MARGINAL = kernel(_log_marginal_loop)
 
 
 def kappa_posterior(s: float, steps: int, model: FusionModel) -> np.ndarray:

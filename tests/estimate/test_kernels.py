@@ -74,3 +74,37 @@ def test_the_loop_itself_is_the_reference_in_plain_python() -> None:
     wt = np.ascontiguousarray(w.T)
     got = model._sum_cos_loop(data.along, data.across, wt, 16)
     np.testing.assert_allclose(got, sum_cos_reference(data, w), rtol=0.0, atol=1e-12)
+
+
+@needs_numba
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(st.floats(-5000.0, 5000.0, allow_nan=False), min_size=1, max_size=50),
+    st.integers(1, 6000),
+    st.floats(0.05, 5.0),
+    st.floats(20.0, 90.0),
+    st.integers(2, 40),
+)
+def test_compiled_log_marginal_agrees_with_the_reference(
+    stat: list[float], steps: int, sigma_min: float, sigma_max: float, points: int
+) -> None:
+    """``log p(data | w)`` from ``S``, κ integrated out: compiled against numpy's log-sum-exp."""
+    m = model.FusionModel(sigma_min_deg=sigma_min, sigma_max_deg=sigma_max, kappa_points=points)
+    s = np.clip(np.asarray(stat), -steps, steps)  # |S| ≤ T: a sum of cosines
+    assert model.LOG_MARGINAL.ready()
+    got = model.LOG_MARGINAL(s, float(steps), m.kappas, m._log_norm)
+    want = model.log_marginal(s, steps, m)
+    np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-12)
+
+
+def test_the_row_likelihood_is_the_reference_in_both_modes(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``row_loglik`` of a continuous row, compiled and with the numpy references."""
+    rng = np.random.default_rng(11)
+    data, _ = _row(rng, 300, 5, True)
+    w = rng.dirichlet(np.full(5, 0.5), 64)
+    m = model.FusionModel()
+    fast = model.row_loglik(data, w, m)
+    monkeypatch.setenv("LFDFUSE_KERNELS", "numpy")
+    ref = model.row_loglik(data, w, m)
+    assert np.array_equal(ref, model.log_marginal(sum_cos_reference(data, w), data.steps, m))
+    np.testing.assert_allclose(fast, ref, rtol=1e-13, atol=1e-12)
