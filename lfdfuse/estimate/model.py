@@ -369,15 +369,16 @@ def cos_errors(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 BLOCK_ELEMENTS = 1 << 21
 
 
-def sum_cos(data: RowData, w: np.ndarray) -> np.ndarray:
+def sum_cos(data: RowData, w: np.ndarray, *, of: int | None = None) -> np.ndarray:
     """The sufficient statistic ``S = Σₜ cos Δₜ`` for weight vectors ``w (P, n)`` → ``(P,)``.
 
     The compiled loop (:data:`SUM_COS`) where it runs, else :func:`sum_cos_reference`; the two
     agree to rounding (the loop takes ``|f|`` as ``√(a² + b²)`` rather than ``hypot``, and its dot
-    products in the order written).
+    products in the order written). ``of``: ``w`` is a subset of that many particles, each of
+    which gets the number it gets among all of them (the steps are summed in the same blocks).
     """
     wt = np.ascontiguousarray(w.T, dtype=np.float64)
-    block = max(16, BLOCK_ELEMENTS // max(1, w.shape[0]))
+    block = max(16, BLOCK_ELEMENTS // max(1, of or w.shape[0]))
     if w.shape[1] and SUM_COS.ready():
         return np.asarray(SUM_COS(data.along, data.across, wt, block))
     return sum_cos_reference(data, w)
@@ -436,6 +437,14 @@ def _sum_cos_loop(along: np.ndarray, across: np.ndarray, wt: np.ndarray, block: 
 SUM_COS = kernel(_sum_cos_loop)
 
 
+def subset_exact(data: Row) -> bool:
+    """Whether the likelihood of a subset of particles is, particle by particle, the number the
+    whole set gets (``row_loglik(..., of=)``): a continuous row with the compiled kernels, where
+    each particle's sum runs on its own. The numpy reference blocks its products by the particle
+    count, so there it is not."""
+    return isinstance(data, RowData) and SUM_COS.ready() and LOG_MARGINAL.ready()
+
+
 def _cdf_at(x: np.ndarray, table: np.ndarray) -> np.ndarray:
     """The tabulated CDFs ``table (G + 1, J)`` at ``x (…)`` in ``[−π, π]`` → ``(…, J)`` (linear;
     the nodes last, so each lookup gathers one contiguous row)."""
@@ -478,14 +487,18 @@ def discrete_log_marginal(data: DiscreteRowData, w: np.ndarray, model: FusionMod
     return np.asarray(logsumexp(ll, axis=1) - math.log(j))
 
 
-def row_loglik(data: Row, w: np.ndarray, model: FusionModel) -> np.ndarray:
-    """``log p(data | w)`` with the noise integrated out, for weights ``w (P, n)`` → ``(P,)``."""
+def row_loglik(data: Row, w: np.ndarray, model: FusionModel, *, of: int | None = None) -> np.ndarray:
+    """``log p(data | w)`` with the noise integrated out, for weights ``w (P, n)`` → ``(P,)``.
+
+    ``of`` (a continuous row with the compiled kernels only, see :func:`subset_exact`): ``w`` is
+    a subset of that many particles.
+    """
     if isinstance(data, DiscreteRowData):
         return discrete_log_marginal(data, w, model)
     if isinstance(data, MixedRowData):
         both = row_loglik(data.continuous, w, model) + discrete_log_marginal(data.discrete, w, model)
         return np.asarray(both)
-    stat = sum_cos(data, w)
+    stat = sum_cos(data, w, of=of)
     if LOG_MARGINAL.ready():
         return np.asarray(LOG_MARGINAL(stat, float(data.steps), model.kappas, model._log_norm))
     return log_marginal(stat, data.steps, model)

@@ -108,3 +108,54 @@ def test_the_row_likelihood_is_the_reference_in_both_modes(monkeypatch: pytest.M
     ref = model.row_loglik(data, w, m)
     assert np.array_equal(ref, model.log_marginal(sum_cos_reference(data, w), data.steps, m))
     np.testing.assert_allclose(fast, ref, rtol=1e-13, atol=1e-12)
+
+
+@needs_numba
+@pytest.mark.parametrize("seed", range(3))
+def test_the_sampler_skipping_finished_trials_gives_the_same_draws(
+    seed: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """With the compiled likelihood a row's finished trials are not computed again: every draw,
+    evidence and acceptance is the one computing them all gives, to the bit."""
+    from lfdfuse.estimate import smc
+    from lfdfuse.estimate.smc import SMCParams, TemperedSMC
+
+    rng = np.random.default_rng(seed)
+    rows = []
+    for n, t in ((3, 80), (5, 200), (2, 30)):
+        vectors = rng.normal(0.0, 0.6, (t, n, 2))
+        w = rng.dirichlet(np.full(n, 0.5))
+        demo = np.einsum("tnk,n->tk", vectors, w) + rng.normal(0.0, 0.1, (t, 2))
+        rows.append(model.row_data(vectors, demo))
+
+    def run() -> smc.SMCResult:
+        return TemperedSMC(
+            rows,
+            trials=5,
+            model=model.FusionModel(),
+            params=SMCParams(particles=64),
+            rng=np.random.default_rng(seed),
+        ).run()
+
+    skipped: list[int] = []
+    real = smc._Rows.loglik
+
+    def counting(
+        self: smc._Rows, w: np.ndarray, active: np.ndarray, chains: np.ndarray | None = None
+    ) -> np.ndarray:
+        if chains is not None:
+            skipped.append(int((~chains[active]).sum()))
+        return real(self, w, active, chains)
+
+    monkeypatch.setattr(smc._Rows, "loglik", counting)
+    fast = run()
+    monkeypatch.setattr(smc, "subset_exact", lambda _data: False)
+    whole = run()
+    assert sum(skipped) > 0  # some trials finished before others: the subset path ran
+    for a, b in zip(
+        (fast.logw, fast.log_evidence, fast.acceptance),
+        (whole.logw, whole.log_evidence, whole.acceptance),
+        strict=True,
+    ):
+        assert np.array_equal(a, b)
+    assert fast.iterations == whole.iterations
