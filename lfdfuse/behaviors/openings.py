@@ -99,7 +99,7 @@ def median(x: np.ndarray) -> float:
 @lru_cache(maxsize=16)
 def _bearings(geometry: ScanGeometry) -> np.ndarray:
     """The beams' bearings wrapped into (−π, π] (read-only, once per layout)."""
-    a = np.arctan2(np.sin(geometry.angles), np.cos(geometry.angles))
+    a = np.asarray(np.arctan2(np.sin(geometry.angles), np.cos(geometry.angles)))
     a.flags.writeable = False
     return a
 
