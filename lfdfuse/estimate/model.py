@@ -120,7 +120,8 @@ from functools import cached_property
 import numpy as np
 from scipy.special import i0e, logsumexp
 
-from lfdfuse.jit import kernel
+from lfdfuse.estimate import kernels
+from lfdfuse.estimate.kernels import LOG_MARGINAL, SUM_COS, sum_cos_reference
 
 
 @dataclass(frozen=True)
@@ -363,86 +364,15 @@ def cos_errors(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.where(r > 1e-12, a / np.maximum(r, 1e-12), 0.0)
 
 
-#: elements of a (steps × particles) temporary when summing over a row: steps are taken in blocks
-#: of this size over the particle count, so an hour-long demo or 30 trials cost the same memory
-#: as a minute-long one
-BLOCK_ELEMENTS = 1 << 21
-
-
 def sum_cos(data: RowData, w: np.ndarray, *, of: int | None = None) -> np.ndarray:
-    """The sufficient statistic ``S = Σₜ cos Δₜ`` for weight vectors ``w (P, n)`` → ``(P,)``.
-
-    The compiled loop (:data:`SUM_COS`) where it runs, else :func:`sum_cos_reference`; the two
-    agree to rounding (the loop takes ``|f|`` as ``√(a² + b²)`` rather than ``hypot``, and its dot
-    products in the order written). ``of``: ``w`` is a subset of that many particles, each of
-    which gets the number it gets among all of them (the steps are summed in the same blocks).
-    """
+    """The sufficient statistic ``S = Σₜ cos Δₜ`` for weight vectors ``w (P, n)`` → ``(P,)``:
+    compiled (:mod:`lfdfuse.estimate.kernels`) or :func:`sum_cos_reference`, equal to rounding.
+    ``of``: ``w`` is a subset of that many particles (the steps summed in their blocks)."""
     wt = np.ascontiguousarray(w.T, dtype=np.float64)
-    block = max(16, BLOCK_ELEMENTS // max(1, of or w.shape[0]))
+    block = max(16, kernels.BLOCK_ELEMENTS // max(1, of or w.shape[0]))
     if w.shape[1] and SUM_COS.ready():
         return np.asarray(SUM_COS(data.along, data.across, wt, block))
     return sum_cos_reference(data, w)
-
-
-def sum_cos_reference(data: RowData, w: np.ndarray) -> np.ndarray:
-    """:func:`sum_cos` in numpy (one BLAS product per block of steps): the reference."""
-    wt = np.ascontiguousarray(w.T)
-    s = np.zeros(w.shape[0])
-    block = max(16, BLOCK_ELEMENTS // max(1, w.shape[0]))
-    for c in range(0, data.steps, block):
-        a = data.along[c : c + block] @ wt
-        b = data.across[c : c + block] @ wt
-        # cos Δ = a / max(|(a, b)|, ε), in place: the same numbers, a third less time than temporaries
-        np.hypot(a, b, out=b)
-        np.maximum(b, 1e-12, out=b)
-        np.divide(a, b, out=a)
-        s += a.sum(axis=0)
-    return s
-
-
-def _sum_cos_loop(along: np.ndarray, across: np.ndarray, wt: np.ndarray, block: int) -> np.ndarray:
-    """:func:`sum_cos` as one loop: ``along, across (T, n)``, ``wt (n, P)`` → ``S (P,)``, summed
-    over blocks of ``block`` steps as the reference sums them (the particles innermost)."""
-    steps, n = along.shape
-    p_count = wt.shape[1]
-    s = np.zeros(p_count)
-    part = np.zeros(p_count)
-    a = np.empty(p_count)
-    b = np.empty(p_count)
-    for c in range(0, steps, block):
-        for t in range(c, min(steps, c + block)):
-            x0 = along[t, 0]
-            y0 = across[t, 0]
-            for p in range(p_count):
-                a[p] = x0 * wt[0, p]
-                b[p] = y0 * wt[0, p]
-            for k in range(1, n):
-                x = along[t, k]
-                y = across[t, k]
-                for p in range(p_count):
-                    a[p] += x * wt[k, p]
-                    b[p] += y * wt[k, p]
-            if t == c:
-                for p in range(p_count):
-                    part[p] = a[p] / max(math.sqrt(a[p] * a[p] + b[p] * b[p]), 1e-12)
-            else:
-                for p in range(p_count):
-                    part[p] += a[p] / max(math.sqrt(a[p] * a[p] + b[p] * b[p]), 1e-12)
-        for p in range(p_count):
-            s[p] += part[p]
-    return s
-
-
-#: :func:`_sum_cos_loop`, compiled on first use
-SUM_COS = kernel(_sum_cos_loop)
-
-
-def subset_exact(data: Row) -> bool:
-    """Whether the likelihood of a subset of particles is, particle by particle, the number the
-    whole set gets (``row_loglik(..., of=)``): a continuous row with the compiled kernels, where
-    each particle's sum runs on its own. The numpy reference blocks its products by the particle
-    count, so there it is not."""
-    return isinstance(data, RowData) and SUM_COS.ready() and LOG_MARGINAL.ready()
 
 
 def _cdf_at(x: np.ndarray, table: np.ndarray) -> np.ndarray:
@@ -461,7 +391,7 @@ def discrete_log_marginal(data: DiscreteRowData, w: np.ndarray, model: FusionMod
     table = model.vm_cdf_rows
     j = table.shape[1]
     ll = np.zeros((w.shape[0], j))
-    block = max(16, BLOCK_ELEMENTS // max(1, w.shape[0] * j))
+    block = max(16, kernels.BLOCK_ELEMENTS // max(1, w.shape[0] * j))
     lapse: float | np.ndarray
     if isinstance(data.commands, np.ndarray):  # pooled demos' command sets of several sizes
         lapse = model.lapse / np.maximum(1.0, data.commands)
@@ -488,11 +418,8 @@ def discrete_log_marginal(data: DiscreteRowData, w: np.ndarray, model: FusionMod
 
 
 def row_loglik(data: Row, w: np.ndarray, model: FusionModel, *, of: int | None = None) -> np.ndarray:
-    """``log p(data | w)`` with the noise integrated out, for weights ``w (P, n)`` → ``(P,)``.
-
-    ``of`` (a continuous row with the compiled kernels only, see :func:`subset_exact`): ``w`` is
-    a subset of that many particles.
-    """
+    """``log p(data | w)`` with the noise integrated out, for weights ``w (P, n)`` → ``(P,)``
+    (``of``: see :func:`sum_cos`; a continuous row only)."""
     if isinstance(data, DiscreteRowData):
         return discrete_log_marginal(data, w, model)
     if isinstance(data, MixedRowData):
@@ -517,30 +444,6 @@ def log_marginal(s: np.ndarray, steps: np.ndarray | int, model: FusionModel) -> 
     terms -= top[..., None]
     np.exp(terms, out=terms)
     return np.asarray(top + np.log(terms.sum(axis=-1)) - math.log(len(k)))
-
-
-def _log_marginal_loop(s: np.ndarray, steps: float, kappas: np.ndarray, log_norm: np.ndarray) -> np.ndarray:
-    """:func:`log_marginal` for ``S (P,)`` of rows of ``steps`` steps, as one loop."""
-    j_count = len(kappas)
-    out = np.empty(len(s))
-    terms = np.empty(j_count)
-    log_j = math.log(j_count)
-    for p in range(len(s)):
-        top = -np.inf
-        for j in range(j_count):
-            x = kappas[j] * (s[p] - steps) - steps * log_norm[j]
-            terms[j] = x
-            if x > top:
-                top = x
-        acc = 0.0
-        for j in range(j_count):
-            acc += math.exp(terms[j] - top)
-        out[p] = top + math.log(acc) - log_j
-    return out
-
-
-#: :func:`_log_marginal_loop`, compiled on first use
-LOG_MARGINAL = kernel(_log_marginal_loop)
 
 
 def kappa_posterior(s: float, steps: int, model: FusionModel) -> np.ndarray:

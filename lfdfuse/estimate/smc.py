@@ -30,14 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import logsumexp
 
-from lfdfuse.estimate.model import (
-    FusionModel,
-    Row,
-    log_prior_alr,
-    row_loglik,
-    sample_prior,
-    subset_exact,
-)
+from lfdfuse.estimate.kernels import LOG_MARGINAL, SUM_COS
+from lfdfuse.estimate.model import FusionModel, Row, RowData, log_prior_alr, row_loglik, sample_prior
 from lfdfuse.estimate.resampling import ess, gather, resample
 
 
@@ -82,6 +76,14 @@ class SMCResult:
         return np.asarray(np.einsum("cmi,cmj->cij", d, d) / max(1, w.shape[1] - 1))
 
 
+def subset_exact(data: Row) -> bool:
+    """Whether the likelihood of a subset of particles is, particle by particle, the number the
+    whole set gets (``row_loglik(..., of=)``): a continuous row with the compiled kernels, where
+    each particle's sum runs on its own. The numpy reference blocks its products by the particle
+    count, so there it is not."""
+    return isinstance(data, RowData) and SUM_COS.ready() and LOG_MARGINAL.ready()
+
+
 class _Rows:
     """The rows' data; ``log p(data | w)`` per row (one BLAS product per block of steps)."""
 
@@ -95,7 +97,7 @@ class _Rows:
 
         ``chains (R, K)``: the trials (each ``P / K`` particles) of a row that are wanted; where
         the compiled likelihood gives each particle the number it gets among all
-        (:func:`~lfdfuse.estimate.model.subset_exact`) only those are computed, the rest left
+        (:func:`subset_exact`) only those are computed, the rest left
         at 0 (a row's trials finish at different iterations). A batched 3-D product is an
         order of magnitude slower here than a loop of 2-D ones.
         """

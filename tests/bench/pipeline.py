@@ -277,7 +277,8 @@ def reference_kernels() -> Iterator[None]:
 
 def bench_likelihood(rows: list[Row], folder: Path) -> None:
     """The pf sampler's likelihood statistic (``sum_cos``): compiled beside its numpy reference."""
-    from lfdfuse.estimate.model import SUM_COS, row_data, sum_cos, sum_cos_reference
+    from lfdfuse.estimate.kernels import SUM_COS, sum_cos_reference
+    from lfdfuse.estimate.model import row_data, sum_cos
 
     rng = np.random.default_rng(0)
     t, n, p = 600, 6, 384 * 30  # a row of a 10-minute demo, the paper's K=30 trials

@@ -12,10 +12,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse.estimate import model
+from lfdfuse.estimate import kernels, model
 from lfdfuse.estimate.model import RowData, sum_cos, sum_cos_reference
 
-needs_numba = pytest.mark.skipif(not model.SUM_COS.ready(), reason="numba kernels unavailable here")
+needs_numba = pytest.mark.skipif(not kernels.SUM_COS.ready(), reason="numba kernels unavailable here")
 
 
 def _row(rng: np.random.Generator, steps: int, n: int, zeros: bool) -> tuple[RowData, np.ndarray]:
@@ -51,7 +51,7 @@ def test_compiled_sum_cos_agrees_with_the_reference(
 @needs_numba
 def test_compiled_sum_cos_sums_blocks_as_the_reference(monkeypatch: pytest.MonkeyPatch) -> None:
     """Rows longer than one block of steps (the block shrinks with the particle count)."""
-    monkeypatch.setattr(model, "BLOCK_ELEMENTS", 64 * 50)
+    monkeypatch.setattr(kernels, "BLOCK_ELEMENTS", 64 * 50)
     rng = np.random.default_rng(7)
     data, _ = _row(rng, 1234, 6, True)
     w = rng.dirichlet(np.full(6, 0.5), 50)
@@ -72,7 +72,7 @@ def test_the_loop_itself_is_the_reference_in_plain_python() -> None:
     data, _ = _row(rng, 40, 3, True)
     w = rng.dirichlet(np.full(3, 0.5), 7)
     wt = np.ascontiguousarray(w.T)
-    got = model._sum_cos_loop(data.along, data.across, wt, 16)
+    got = kernels._sum_cos_loop(data.along, data.across, wt, 16)
     np.testing.assert_allclose(got, sum_cos_reference(data, w), rtol=0.0, atol=1e-12)
 
 
@@ -91,8 +91,8 @@ def test_compiled_log_marginal_agrees_with_the_reference(
     """``log p(data | w)`` from ``S``, κ integrated out: compiled against numpy's log-sum-exp."""
     m = model.FusionModel(sigma_min_deg=sigma_min, sigma_max_deg=sigma_max, kappa_points=points)
     s = np.clip(np.asarray(stat), -steps, steps)  # |S| ≤ T: a sum of cosines
-    assert model.LOG_MARGINAL.ready()
-    got = model.LOG_MARGINAL(s, float(steps), m.kappas, m._log_norm)
+    assert kernels.LOG_MARGINAL.ready()
+    got = kernels.LOG_MARGINAL(s, float(steps), m.kappas, m._log_norm)
     want = model.log_marginal(s, steps, m)
     np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-12)
 
