@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from typing import Literal, Protocol
 
 import numpy as np
@@ -136,7 +136,10 @@ def dot(weights: np.ndarray, dirs: np.ndarray) -> np.ndarray:
     Row-wise reductions, not a BLAS matmul: each row's result is bit-identical whether it is
     computed alone (live) or in a batch (offline).
     """
-    return np.column_stack([(weights * dirs[:, 0]).sum(axis=1), (weights * dirs[:, 1]).sum(axis=1)])
+    out = np.empty((weights.shape[0], 2))
+    out[:, 0] = (weights * dirs[:, 0]).sum(axis=1)
+    out[:, 1] = (weights * dirs[:, 1]).sum(axis=1)
+    return out
 
 
 def pool_strongest(weights: np.ndarray, dirs: np.ndarray) -> np.ndarray:
@@ -180,19 +183,24 @@ class Scan:
         self.n = int(self.r.shape[0])
 
     @cached_property
+    def beams(self) -> Beams:
+        """The scanner's beam layout as the primitives see it (computed once per layout)."""
+        return beams_of(self.obs.geometry, self.params)
+
+    @property
     def ang(self) -> np.ndarray:
         """``(B,)`` beam bearings in (−π, π]."""
-        return wrap(self.obs.geometry.angles)
+        return self.beams.ang
 
-    @cached_property
+    @property
     def dirs(self) -> np.ndarray:
         """``(B, 2)`` unit vectors along the beams."""
-        return np.column_stack([np.cos(self.ang), np.sin(self.ang)])
+        return self.beams.dirs
 
-    @cached_property
+    @property
     def own(self) -> np.ndarray:
         """``(B,)`` beams whose bearing no earlier beam has (:func:`distinct_beams`)."""
-        return distinct_beams(self.obs.geometry)
+        return self.beams.own
 
     @cached_property
     def valid(self) -> np.ndarray:
@@ -218,27 +226,64 @@ class Scan:
         d = self.params.d_max_m
         return np.where(self.near, (d - self.rn) / d, 0.0)
 
-    @cached_property
+    @property
     def front(self) -> np.ndarray:
         """``(B,)`` beams in the front half."""
-        return np.asarray((np.abs(self.ang) <= math.pi / 2 + 1e-9) & self.own)
+        return self.beams.front
 
-    @cached_property
+    @property
     def left(self) -> np.ndarray:
         """``(B,)`` beams from straight ahead to ``side_sector_rad`` to the left."""
-        a = self.ang
-        return np.asarray((a >= -1e-9) & (a <= self.params.side_sector_rad + 1e-9) & self.own)
+        return self.beams.left
 
-    @cached_property
+    @property
     def right(self) -> np.ndarray:
         """``(B,)`` beams from straight ahead to ``side_sector_rad`` to the right."""
-        a = self.ang
-        return np.asarray((a <= 1e-9) & (a >= -self.params.side_sector_rad - 1e-9) & self.own)
+        return self.beams.right
 
-    @cached_property
+    @property
     def cone(self) -> np.ndarray:
         """``(B,)`` beams in the front cone of ``front_cone_rad``."""
-        return np.asarray((np.abs(self.ang) <= self.params.front_cone_rad / 2 + 1e-9) & self.own)
+        return self.beams.cone
+
+
+class Beams:
+    """What a scanner's beam layout gives every scan: bearings, directions and sectors.
+
+    A function of the geometry and the parameters alone, so computed once per layout
+    (:func:`beams_of`) rather than once per block: a live run computes blocks of one scan.
+    The arrays are read-only.
+    """
+
+    def __init__(self, geometry: ScanGeometry, params: BehaviorParams) -> None:
+        ang = wrap(geometry.angles)
+        own = distinct_beams(geometry)
+        self.ang = ang
+        self.dirs = np.column_stack([np.cos(ang), np.sin(ang)])
+        self.own = own
+        self.front = np.asarray((np.abs(ang) <= math.pi / 2 + 1e-9) & own)
+        self.left = np.asarray((ang >= -1e-9) & (ang <= params.side_sector_rad + 1e-9) & own)
+        self.right = np.asarray((ang <= 1e-9) & (ang >= -params.side_sector_rad - 1e-9) & own)
+        self.cone = np.asarray((np.abs(ang) <= params.front_cone_rad / 2 + 1e-9) & own)
+        self.away = -self.dirs
+        self._tangents: dict[float, np.ndarray] = {}
+        for a in (self.ang, self.dirs, self.own, self.front, self.left, self.right, self.cone, self.away):
+            a.flags.writeable = False
+
+    def tangent(self, turn: float) -> np.ndarray:
+        """``(B, 2)`` unit vectors at ``turn`` (rad) from each beam (read-only)."""
+        t = self._tangents.get(turn)
+        if t is None:
+            t = np.column_stack([np.cos(self.ang + turn), np.sin(self.ang + turn)])
+            t.flags.writeable = False
+            self._tangents[turn] = t
+        return t
+
+
+@lru_cache(maxsize=32)
+def beams_of(geometry: ScanGeometry, params: BehaviorParams) -> Beams:
+    """The :class:`Beams` of a layout, cached (a run has one or two layouts)."""
+    return Beams(geometry, params)
 
 
 @dataclass(frozen=True)

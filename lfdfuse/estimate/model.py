@@ -127,6 +127,9 @@ from functools import cached_property
 import numpy as np
 from scipy.special import i0e, logsumexp
 
+from lfdfuse.estimate import kernels
+from lfdfuse.estimate.kernels import LOG_MARGINAL, SUM_COS, sum_cos_reference
+
 
 @dataclass(frozen=True)
 class FusionModel:
@@ -368,26 +371,15 @@ def cos_errors(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.where(r > 1e-12, a / np.maximum(r, 1e-12), 0.0)
 
 
-#: elements of a (steps × particles) temporary when summing over a row: steps are taken in blocks
-#: of this size over the particle count, so an hour-long demo or 30 trials cost the same memory
-#: as a minute-long one
-BLOCK_ELEMENTS = 1 << 21
-
-
-def sum_cos(data: RowData, w: np.ndarray) -> np.ndarray:
-    """The sufficient statistic ``S = Σₜ cos Δₜ`` for weight vectors ``w (P, n)`` → ``(P,)``."""
-    wt = np.ascontiguousarray(w.T)
-    s = np.zeros(w.shape[0])
-    block = max(16, BLOCK_ELEMENTS // max(1, w.shape[0]))
-    for c in range(0, data.steps, block):
-        a = data.along[c : c + block] @ wt
-        b = data.across[c : c + block] @ wt
-        # cos Δ = a / max(|(a, b)|, ε), in place: the same numbers, a third less time than temporaries
-        np.hypot(a, b, out=b)
-        np.maximum(b, 1e-12, out=b)
-        np.divide(a, b, out=a)
-        s += a.sum(axis=0)
-    return s
+def sum_cos(data: RowData, w: np.ndarray, *, of: int | None = None) -> np.ndarray:
+    """The sufficient statistic ``S = Σₜ cos Δₜ`` for weight vectors ``w (P, n)`` → ``(P,)``:
+    compiled (:mod:`lfdfuse.estimate.kernels`) or :func:`sum_cos_reference`, equal to rounding.
+    ``of``: ``w`` is a subset of that many particles (the steps summed in their blocks)."""
+    wt = np.ascontiguousarray(w.T, dtype=np.float64)
+    block = max(16, kernels.BLOCK_ELEMENTS // max(1, of or w.shape[0]))
+    if w.shape[1] and SUM_COS.ready():
+        return np.asarray(SUM_COS(data.along, data.across, wt, block))
+    return sum_cos_reference(data, w)
 
 
 def _cdf_at(x: np.ndarray, table: np.ndarray) -> np.ndarray:
@@ -406,7 +398,7 @@ def discrete_log_marginal(data: DiscreteRowData, w: np.ndarray, model: FusionMod
     table = model.vm_cdf_rows
     j = table.shape[1]
     ll = np.zeros((w.shape[0], j))
-    block = max(16, BLOCK_ELEMENTS // max(1, w.shape[0] * j))
+    block = max(16, kernels.BLOCK_ELEMENTS // max(1, w.shape[0] * j))
     lapse: float | np.ndarray
     if isinstance(data.commands, np.ndarray):  # pooled demos' command sets of several sizes
         lapse = model.lapse / np.maximum(1.0, data.commands)
@@ -432,14 +424,18 @@ def discrete_log_marginal(data: DiscreteRowData, w: np.ndarray, model: FusionMod
     return np.asarray(logsumexp(ll, axis=1) - math.log(j))
 
 
-def row_loglik(data: Row, w: np.ndarray, model: FusionModel) -> np.ndarray:
-    """``log p(data | w)`` with the noise integrated out, for weights ``w (P, n)`` → ``(P,)``."""
+def row_loglik(data: Row, w: np.ndarray, model: FusionModel, *, of: int | None = None) -> np.ndarray:
+    """``log p(data | w)`` with the noise integrated out, for weights ``w (P, n)`` → ``(P,)``
+    (``of``: see :func:`sum_cos`; a continuous row only)."""
     if isinstance(data, DiscreteRowData):
         return discrete_log_marginal(data, w, model)
     if isinstance(data, MixedRowData):
         both = row_loglik(data.continuous, w, model) + discrete_log_marginal(data.discrete, w, model)
         return np.asarray(both)
-    return log_marginal(sum_cos(data, w), data.steps, model)
+    stat = sum_cos(data, w, of=of)
+    if LOG_MARGINAL.ready():
+        return np.asarray(LOG_MARGINAL(stat, float(data.steps), model.kappas, model._log_norm))
+    return log_marginal(stat, data.steps, model)
 
 
 def log_marginal(s: np.ndarray, steps: np.ndarray | int, model: FusionModel) -> np.ndarray:

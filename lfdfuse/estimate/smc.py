@@ -30,7 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import logsumexp
 
-from lfdfuse.estimate.model import FusionModel, Row, log_prior_alr, row_loglik, sample_prior
+from lfdfuse.estimate.kernels import LOG_MARGINAL, SUM_COS
+from lfdfuse.estimate.model import FusionModel, Row, RowData, log_prior_alr, row_loglik, sample_prior
 from lfdfuse.estimate.resampling import ess, gather, resample
 
 
@@ -75,6 +76,14 @@ class SMCResult:
         return np.asarray(np.einsum("cmi,cmj->cij", d, d) / max(1, w.shape[1] - 1))
 
 
+def subset_exact(data: Row) -> bool:
+    """Whether the likelihood of a subset of particles is, particle by particle, the number the
+    whole set gets (``row_loglik(..., of=)``): a continuous row with the compiled kernels, where
+    each particle's sum runs on its own. The numpy reference blocks its products by the particle
+    count, so there it is not."""
+    return isinstance(data, RowData) and SUM_COS.ready() and LOG_MARGINAL.ready()
+
+
 class _Rows:
     """The rows' data; ``log p(data | w)`` per row (one BLAS product per block of steps)."""
 
@@ -83,14 +92,25 @@ class _Rows:
         self.sizes = [r.size for r in rows]
         self.model = model
 
-    def loglik(self, w: np.ndarray, active: np.ndarray) -> np.ndarray:
+    def loglik(self, w: np.ndarray, active: np.ndarray, chains: np.ndarray | None = None) -> np.ndarray:
         """``log p (R, P)`` for weights ``w (R, P, n)``; rows not ``active (R,)`` are left at 0.
 
-        A batched 3-D product is an order of magnitude slower here than a loop of 2-D ones.
+        ``chains (R, K)``: the trials (each ``P / K`` particles) of a row that are wanted; where
+        the compiled likelihood gives each particle the number it gets among all
+        (:func:`subset_exact`) only those are computed, the rest left
+        at 0 (a row's trials finish at different iterations). A batched 3-D product is an
+        order of magnitude slower here than a loop of 2-D ones.
         """
         out = np.zeros(w.shape[:2])
         for i in np.nonzero(active)[0]:
-            out[i] = row_loglik(self.rows[i], w[i, :, : self.sizes[i]], self.model)
+            data, wi = self.rows[i], w[i, :, : self.sizes[i]]
+            if chains is not None and not chains[i].all() and subset_exact(data):
+                k = chains.shape[1]
+                m = wi.shape[0] // k
+                keep = np.repeat(chains[i], m)
+                out[i, keep] = row_loglik(data, wi[keep], self.model, of=wi.shape[0])
+            else:
+                out[i] = row_loglik(data, wi, self.model)
         return out
 
 
@@ -136,8 +156,9 @@ class TemperedSMC:
         c, m, n = logw.shape
         k = self.trials
         w = np.exp(logw).reshape(self.rows_n, k * m, n)
-        act_rows = np.asarray(active.reshape(self.rows_n, k).any(axis=1))
-        ll = self.data.loglik(w, act_rows).reshape(c, m)
+        chains = active.reshape(self.rows_n, k)
+        act_rows = np.asarray(chains.any(axis=1))
+        ll = self.data.loglik(w, act_rows, chains).reshape(c, m)
         return np.where(active[:, None], ll, 0.0)
 
     # ------------------------------------------------------------------ the algorithm

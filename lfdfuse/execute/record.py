@@ -26,6 +26,8 @@ class LfdRecorder:
     def __init__(self, log: LogWriter, driver: NetworkStepper) -> None:
         self.log = log
         self.driver = driver
+        #: every behaviour's overlay colour, looked up once
+        self.colors = {n: catalogue.rgb(n) for n in driver.table.behaviors}
         for topic, schema in lfd.EXECUTE_TOPICS.items():
             log.add_topic(topic, schema)
 
@@ -60,7 +62,7 @@ class LfdRecorder:
             msg.Arrow(
                 dec.weights[n] * float(vec[j, 0]),
                 dec.weights[n] * float(vec[j, 1]),
-                catalogue.rgb(n),  # the behaviour's colour in every figure
+                self.colors[n],  # the behaviour's colour in every figure
                 1.5,
             )
             for j, n in enumerate(names)

@@ -188,11 +188,16 @@ class NetworkRuntime:
         return None
 
     def fuse(self, outputs: BehaviorOutputs, weights: dict[str, float]) -> np.ndarray:
+        """``Σ w·v`` over the weighted behaviours (in Python floats: the same sums, in order,
+        without a numpy call per behaviour)."""
         names = self.table.behaviors
-        v = np.zeros(2)
+        vec = outputs.vectors[0].tolist()
+        x = y = 0.0
         for name, w in weights.items():
-            v += w * outputs.vectors[0, names.index(name)]
-        return v
+            vx, vy = vec[names.index(name)]
+            x += w * vx
+            y += w * vy
+        return np.array([x, y])
 
 
 def _lag_of(found: tuple[Path, Step] | None) -> float | None:

@@ -8,6 +8,7 @@ Whoever senses — the simulator, a log read back, a robot on the wire — hands
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -23,9 +24,12 @@ class ScanGeometry:
     count: int
     max_range_m: float
 
-    @property
+    @cached_property
     def angles(self) -> np.ndarray:
-        return self.start_rad + self.increment_rad * np.arange(self.count)
+        """``(B,)`` beam bearings (rad), computed once per layout and read-only."""
+        a = self.start_rad + self.increment_rad * np.arange(self.count)
+        a.flags.writeable = False
+        return a
 
     @property
     def end_rad(self) -> float:

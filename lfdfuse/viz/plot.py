@@ -153,8 +153,8 @@ def plot_file(
         return PlotResult(str(out), "table", w, h, f"{len(steps)} steps, {rows} BAC rows")
     data = load_log(p)
     w, h = save_figure(map_figure(data, title=title), out)
-    steps = [n for n in data.part_names if n != PERSON_PART]
-    parts = "" if data.kind == "demo" else f", {counted(len(steps), data.part_label)}"
+    step_names = [n for n in data.part_names if n != PERSON_PART]
+    parts = "" if data.kind == "demo" else f", {counted(len(step_names), data.part_label)}"
     if PERSON_PART in data.part_names:
         mine = int((data.part == data.part_names.index(PERSON_PART)).sum())
         parts += f" (the person drove {counted(mine, 'scan')})"

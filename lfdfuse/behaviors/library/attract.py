@@ -27,8 +27,10 @@ class Attract:
         j = obs.target_names.index(self.target)
         b, tr = obs.target_bearing_rad[:, j], obs.target_range_m[:, j]
         a = np.isfinite(b) & np.isfinite(tr)
-        v = np.where(a[:, None], np.column_stack([np.cos(np.nan_to_num(b)), np.sin(np.nan_to_num(b))]), 0.0)
-        goal = a & (np.nan_to_num(tr, nan=np.inf) <= s.params.reach_m)
+        # where ``a`` holds both are finite; elsewhere the vector is zeroed and the goal unmet
+        bb = np.where(a, b, 0.0)
+        v = np.where(a[:, None], np.column_stack([np.cos(bb), np.sin(bb)]), 0.0)
+        goal = a & (np.where(a, tr, np.inf) <= s.params.reach_m)
         return Result(v, a, goal)
 
 

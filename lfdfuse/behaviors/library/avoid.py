@@ -12,7 +12,7 @@ from lfdfuse.behaviors.spec import BehaviorSpec, Result, Scan, pool_strongest, s
 
 
 def avoid(s: Scan) -> Result:
-    return Result(pool_strongest(s.push, -s.dirs), np.asarray(s.near.any(axis=1)))
+    return Result(pool_strongest(s.push, s.beams.away), np.asarray(s.near.any(axis=1)))
 
 
 def sonar_avoid(s: Scan) -> Result:

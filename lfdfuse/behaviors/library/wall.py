@@ -29,8 +29,7 @@ def wall_attract_in(s: Scan, sector: np.ndarray) -> Result:
 
 def wall_side_in(s: Scan, sector: np.ndarray, turn: float) -> Result:
     hit = s.near & sector[None, :]
-    tang = np.column_stack([np.cos(s.ang + turn), np.sin(s.ang + turn)])
-    return Result(pool_strongest(np.where(hit, s.push, 0.0), tang), hit.any(axis=1))
+    return Result(pool_strongest(np.where(hit, s.push, 0.0), s.beams.tangent(turn)), hit.any(axis=1))
 
 
 SPECS = (

@@ -1,0 +1,161 @@
+"""The particle filter's compiled likelihood loop against its numpy reference.
+
+``sum_cos`` (the sufficient statistic of every particle's likelihood, what the sampler spends
+its time in) runs compiled where numba does; :func:`~lfdfuse.estimate.model.sum_cos_reference`
+is the numpy it must agree with, on the same inputs, to 1e-12.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lfdfuse.estimate import kernels, model
+from lfdfuse.estimate.model import RowData, sum_cos, sum_cos_reference
+
+needs_numba = pytest.mark.skipif(not kernels.SUM_COS.ready(), reason="numba kernels unavailable here")
+
+
+def _row(rng: np.random.Generator, steps: int, n: int, zeros: bool) -> tuple[RowData, np.ndarray]:
+    vectors = rng.normal(0.0, 0.6, (steps, n, 2))
+    if zeros:  # behaviours that were not applicable: zero vectors, and zero fused vectors
+        vectors[rng.uniform(size=(steps, n)) < 0.3] = 0.0
+    demo = rng.normal(0.0, 1.0, (steps, 2))
+    return model.row_data(vectors, demo), rng.dirichlet(np.full(n, 0.5), 1)[0]
+
+
+@needs_numba
+@settings(max_examples=60, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(1, 400),
+    st.integers(1, 9),
+    st.integers(1, 300),
+    st.booleans(),
+)
+def test_compiled_sum_cos_agrees_with_the_reference(
+    seed: int, steps: int, n: int, particles: int, zeros: bool
+) -> None:
+    rng = np.random.default_rng(seed)
+    data, _ = _row(rng, steps, n, zeros)
+    w = rng.dirichlet(np.full(n, 0.5), particles)
+    if zeros:
+        w[: particles // 3] = 0.0  # an all-zero weight vector: every fused vector is zero
+    got, want = sum_cos(data, w), sum_cos_reference(data, w)
+    assert got.shape == want.shape == (particles,)
+    np.testing.assert_allclose(got, want, rtol=0.0, atol=1e-12)
+
+
+@needs_numba
+def test_compiled_sum_cos_sums_blocks_as_the_reference(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Rows longer than one block of steps (the block shrinks with the particle count)."""
+    monkeypatch.setattr(kernels, "BLOCK_ELEMENTS", 64 * 50)
+    rng = np.random.default_rng(7)
+    data, _ = _row(rng, 1234, 6, True)
+    w = rng.dirichlet(np.full(6, 0.5), 50)
+    np.testing.assert_allclose(sum_cos(data, w), sum_cos_reference(data, w), rtol=0.0, atol=1e-12)
+
+
+def test_numpy_mode_runs_the_reference(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("LFDFUSE_KERNELS", "numpy")
+    rng = np.random.default_rng(3)
+    data, _ = _row(rng, 50, 4, False)
+    w = rng.dirichlet(np.full(4, 0.5), 20)
+    assert np.array_equal(sum_cos(data, w), sum_cos_reference(data, w))
+
+
+def test_the_loop_itself_is_the_reference_in_plain_python() -> None:
+    """The loop numba compiles, run by the interpreter: the same statistic."""
+    rng = np.random.default_rng(5)
+    data, _ = _row(rng, 40, 3, True)
+    w = rng.dirichlet(np.full(3, 0.5), 7)
+    wt = np.ascontiguousarray(w.T)
+    got = kernels._sum_cos_loop(data.along, data.across, wt, 16)
+    np.testing.assert_allclose(got, sum_cos_reference(data, w), rtol=0.0, atol=1e-12)
+
+
+@needs_numba
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(st.floats(-5000.0, 5000.0, allow_nan=False), min_size=1, max_size=50),
+    st.integers(1, 6000),
+    st.floats(0.05, 5.0),
+    st.floats(20.0, 90.0),
+    st.integers(2, 40),
+)
+def test_compiled_log_marginal_agrees_with_the_reference(
+    stat: list[float], steps: int, sigma_min: float, sigma_max: float, points: int
+) -> None:
+    """``log p(data | w)`` from ``S``, κ integrated out: compiled against numpy's log-sum-exp."""
+    m = model.FusionModel(sigma_min_deg=sigma_min, sigma_max_deg=sigma_max, kappa_points=points)
+    s = np.clip(np.asarray(stat), -steps, steps)  # |S| ≤ T: a sum of cosines
+    assert kernels.LOG_MARGINAL.ready()
+    got = kernels.LOG_MARGINAL(s, float(steps), m.kappas, m._log_norm)
+    want = model.log_marginal(s, steps, m)
+    np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-12)
+
+
+def test_the_row_likelihood_is_the_reference_in_both_modes(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``row_loglik`` of a continuous row, compiled and with the numpy references."""
+    rng = np.random.default_rng(11)
+    data, _ = _row(rng, 300, 5, True)
+    w = rng.dirichlet(np.full(5, 0.5), 64)
+    m = model.FusionModel()
+    fast = model.row_loglik(data, w, m)
+    monkeypatch.setenv("LFDFUSE_KERNELS", "numpy")
+    ref = model.row_loglik(data, w, m)
+    assert np.array_equal(ref, model.log_marginal(sum_cos_reference(data, w), data.steps, m))
+    np.testing.assert_allclose(fast, ref, rtol=1e-13, atol=1e-12)
+
+
+@needs_numba
+@pytest.mark.parametrize("seed", range(3))
+def test_the_sampler_skipping_finished_trials_gives_the_same_draws(
+    seed: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """With the compiled likelihood a row's finished trials are not computed again: every draw,
+    evidence and acceptance is the one computing them all gives, to the bit."""
+    from lfdfuse.estimate import smc
+    from lfdfuse.estimate.smc import SMCParams, TemperedSMC
+
+    rng = np.random.default_rng(seed)
+    rows = []
+    for n, t in ((3, 80), (5, 200), (2, 30)):
+        vectors = rng.normal(0.0, 0.6, (t, n, 2))
+        w = rng.dirichlet(np.full(n, 0.5))
+        demo = np.einsum("tnk,n->tk", vectors, w) + rng.normal(0.0, 0.1, (t, 2))
+        rows.append(model.row_data(vectors, demo))
+
+    def run() -> smc.SMCResult:
+        return TemperedSMC(
+            rows,
+            trials=5,
+            model=model.FusionModel(),
+            params=SMCParams(particles=64),
+            rng=np.random.default_rng(seed),
+        ).run()
+
+    skipped: list[int] = []
+    real = smc._Rows.loglik
+
+    def counting(
+        self: smc._Rows, w: np.ndarray, active: np.ndarray, chains: np.ndarray | None = None
+    ) -> np.ndarray:
+        if chains is not None:
+            skipped.append(int((~chains[active]).sum()))
+        return real(self, w, active, chains)
+
+    monkeypatch.setattr(smc._Rows, "loglik", counting)
+    fast = run()
+    monkeypatch.setattr(smc, "subset_exact", lambda _data: False)
+    whole = run()
+    assert sum(skipped) > 0  # some trials finished before others: the subset path ran
+    for a, b in zip(
+        (fast.logw, fast.log_evidence, fast.acceptance),
+        (whole.logw, whole.log_evidence, whole.acceptance),
+        strict=True,
+    ):
+        assert np.array_equal(a, b)
+    assert fast.iterations == whole.iterations
