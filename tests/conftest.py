@@ -46,3 +46,25 @@ def dask_cluster() -> Iterator[Any]:
 @pytest.fixture(scope="session")
 def sample_dir() -> Path:
     return ROOT / "sample_logs"
+
+
+@pytest.fixture(scope="session")
+def three_goal_segmented(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``sample_logs/three-goals-building.mcap`` segmented as ``lfdfuse segment`` does by default,
+    once per session: tests read it and write nothing beside it."""
+    from lfdfuse.segment.pipeline import segment_file
+
+    out = tmp_path_factory.mktemp("three-goals") / "three.seg.mcap"
+    segment_file(ROOT / "sample_logs" / "three-goals-building.mcap", out=out)
+    return out
+
+
+@pytest.fixture(scope="session")
+def three_goal_table(three_goal_segmented: Path) -> Any:
+    """The table the default estimate learns from :func:`three_goal_segmented` (a frozen
+    ``FusionTable``), learned once per session for every test that drives or reads it."""
+    from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
+    from lfdfuse.segment.read import read_segmented
+
+    table, _, _ = estimate_run(read_segmented(three_goal_segmented), opts=EstimateOptions())
+    return table

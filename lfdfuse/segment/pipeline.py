@@ -131,10 +131,7 @@ def segment_file(
         params = BehaviorParams(reach_m=reach)
     outputs = compute_in_chunks(obs, names, params)
     segm = segment_outputs(outputs)
-    # a correction's command model is its person's: the network's commands are not theirs
-    by_net = network_ticks(src, run.cmd_t_ns)
-    mine = ~by_net if by_net is not None and not by_net.all() else np.ones(len(run.cmd_t_ns), dtype=bool)
-    mode = detect_commands(run.cmd_v_mps[mine], run.cmd_omega_rps[mine], run.metadata, run.topics, commands)
+    mode = detect_commands(run.cmd_v_mps, run.cmd_omega_rps, run.metadata, run.topics, commands)
     fits = tuple(lag_fits(run, outputs, drive)) if measure_lag or lag_s is None else ()
     if lag_s is None:
         lag_s = best_lag(fits)

@@ -17,8 +17,7 @@ from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions, Method, estimate_run
 from lfdfuse.estimate.smc import SMCParams
 from lfdfuse.learn import LearnOptions, learn
-from lfdfuse.network.table import dump_table, load_table, parse_table, write_table
-from lfdfuse.segment.pipeline import segment_file
+from lfdfuse.network.table import FusionTable, dump_table, load_table, parse_table, write_table
 from lfdfuse.segment.read import read_segmented
 from tests.conftest import ROOT
 
@@ -120,11 +119,9 @@ def test_invalid_tables_are_rejected(path: list[object], value: object, message:
         parse_table(bad)
 
 
-@pytest.fixture(scope="module")
-def segmented(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("est") / "three.seg.mcap"
-    segment_file(ROOT / "sample_logs" / "three-goals-building.mcap", out=out)
-    return out
+@pytest.fixture()
+def segmented(three_goal_segmented: Path) -> Path:
+    return three_goal_segmented
 
 
 @pytest.mark.parametrize("method", list(Method))
@@ -147,13 +144,13 @@ def test_estimate_on_the_sample_demo(segmented: Path, tmp_path: Path, method: Me
     assert res.table.estimated_by["method"] == method.value
 
 
-def test_styles_show_in_the_learned_weights(segmented: Path) -> None:
+def test_styles_show_in_the_learned_weights(three_goal_table: FusionTable) -> None:
     """Keep-left to red, centre to green, keep-right to blue: the wall-attract weights say so.
 
     The style teacher is not a fusion of the primitives, so its weights are unknown: this checks
     only that each side's weight clearly dominates on its step (2×); that the style is really
     reproduced is checked in closed loop (tests/execute/test_closed_loop.py)."""
-    table, _, _ = estimate_run(read_segmented(segmented), opts=EstimateOptions())
+    table = three_goal_table  # the default estimate of the sample demo
 
     def side_weights(step_index: int) -> tuple[float, float]:
         rows = [r for r in table.network.steps[step_index].fusion if r.samples and r.samples >= 100]

@@ -31,7 +31,6 @@ from lfdfuse.segment.read import read_segmented
 from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import Leg
 from lfdfuse.world.model import load_world
-from tests.conftest import ROOT
 
 
 def learn(tmp: Path, world: str, style: str, *, seed: int, duration: float, name: str) -> FusionTable:
@@ -175,9 +174,8 @@ def test_t_junction_choice_follows_the_style(
 # ------------------------------------------------------------------ 3. the sequenced task
 
 
-def test_three_goal_task_from_perturbed_starts(tmp_path: Path) -> None:
-    segment_file(ROOT / "sample_logs" / "three-goals-building.mcap", out=tmp_path / "s.mcap")
-    table, _, _ = estimate_run(read_segmented(tmp_path / "s.mcap"), opts=EstimateOptions())
+def test_three_goal_task_from_perturbed_starts(tmp_path: Path, three_goal_table: FusionTable) -> None:
+    table = three_goal_table  # the sample demo segmented and estimated with the defaults
     rng = np.random.default_rng(2026)
     complete = 0
     for k in range(10):

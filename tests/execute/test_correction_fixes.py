@@ -34,7 +34,7 @@ from lfdfuse.network.table import FusionTable, dump_table, load_table, named_lea
 from lfdfuse.segment.read import network_ticks, read_segmented
 from lfdfuse.world.model import load_world
 from tests.conftest import ROOT
-from tests.support.offroute import CASES, demonstrate, perturbed_starts, run_starts
+from tests.support.offroute import CASES, perturbed_starts, run_starts
 
 FIX_SCRIPT = ROOT / "tests" / "sources" / "teleop" / "ring-spur-fix.yaml"
 
@@ -55,10 +55,10 @@ def _rows(table: FusionTable) -> dict[tuple[str | None, int], object]:
 
 
 def test_one_scripted_correction_fixes_the_ring_spur_table_and_changes_only_its_rows(
-    tmp_path: Path,
+    tmp_path: Path, ring_spur_demo: Path
 ) -> None:
     case = CASES["ring-spur"]
-    demo = demonstrate(case, folder=tmp_path)  # seed 1
+    demo = ring_spur_demo  # the teacher's, seed 1
     # learned as `estimate demo.seg.mcap --particles 128` does, without sub-goals, seed 0
     opts = EstimateOptions(
         seed=0,

@@ -15,25 +15,14 @@ from typer.testing import CliRunner
 from lfdfuse.behaviors.primitives import BehaviorOutputs
 from lfdfuse.cli.main import app
 from lfdfuse.errors import ConfigError
-from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run
 from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.log.reader import iter_messages
 from lfdfuse.network.runtime import NetworkRuntime
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step, dump_table
-from lfdfuse.segment.pipeline import segment_file
-from lfdfuse.segment.read import read_segmented
 from lfdfuse.world.model import load_world
-from tests.conftest import ROOT, mcap_check
+from tests.conftest import mcap_check
 
 runner = CliRunner()
-
-
-@pytest.fixture(scope="module")
-def three_goal_table(tmp_path_factory: pytest.TempPathFactory) -> FusionTable:
-    d = tmp_path_factory.mktemp("exec")
-    segment_file(ROOT / "sample_logs" / "three-goals-building.mcap", out=d / "s.mcap")
-    table, _, _ = estimate_run(read_segmented(d / "s.mcap"), opts=EstimateOptions())
-    return table
 
 
 def _outputs(k: int, bac: int) -> BehaviorOutputs:

@@ -288,9 +288,11 @@ def test_a_turn_into_an_office_off_the_route_is_reproduced(office: tuple[Path, P
     assert all(r["completed"] and r["collisions"] == 0 for r in rows), rows
 
 
-def test_a_turn_into_a_dead_end_spur_off_the_route_is_reproduced(tmp_path: Path) -> None:
+def test_a_turn_into_a_dead_end_spur_off_the_route_is_reproduced(
+    tmp_path: Path, ring_spur_demo: Path
+) -> None:
     case = CASES["ring-spur"]
-    seg = demonstrate(case, folder=tmp_path)
+    seg = ring_spur_demo
     table = learn_case(seg, subgoals=True)
     inner = table.network.steps[1].network
     assert inner is not None, "the turn into the spur is a decision point"

@@ -20,6 +20,11 @@ from tests.parallel.conftest import CORRIDOR_TABLE
 
 pytest.importorskip("distributed")
 
+#: what these tests compare (serial against the cluster, a batch against one log) holds for any
+#: number of folds; two fit each method twice per log instead of five times (5-fold is
+#: tests/evaluate's)
+FOLDS = 2
+
 
 @pytest.fixture()
 def cluster(dask_cluster: Executor) -> Executor:
@@ -39,10 +44,10 @@ def test_evaluate_many_logs_serial_and_on_two_workers_are_byte_identical(
 ) -> None:
     missing = tmp_path / "gone.mcap"
     paths = [*short_demos, missing]
-    serial = evaluate_logs(paths, executor=InProcess(), seed=2)
+    serial = evaluate_logs(paths, executor=InProcess(), seed=2, folds=FOLDS)
     events = list(serial)
     assert events[-1].failed == 1 and events[-1].done == 2
-    dask = evaluate_logs(paths, executor=cluster, seed=2)
+    dask = evaluate_logs(paths, executor=cluster, seed=2, folds=FOLDS)
     a, b = serial.result().to_dict(), dask.result().to_dict()
     assert json.dumps(a, indent=1) == json.dumps(b, indent=1)
     logs = a["logs"]
@@ -60,7 +65,8 @@ def test_evaluate_many_logs_serial_and_on_two_workers_are_byte_identical(
 
 def test_a_segmented_log_in_a_batch_scores_as_it_does_alone(short_demos: list[Path], tmp_path: Path) -> None:
     seg = segment_file(short_demos[0], out=tmp_path / "a.seg.mcap", lag_s=None)  # as `lfdfuse segment`
-    batch = evaluate_logs([Path(seg.out), short_demos[0]], executor=InProcess()).result().to_dict()
+    logs = [Path(seg.out), short_demos[0]]
+    batch = evaluate_logs(logs, executor=InProcess(), folds=FOLDS).result().to_dict()
     before, on_the_way = (
         {k: v for k, v in e.items() if k not in ("path", "prepared")} for e in batch["logs"]
     )
@@ -76,7 +82,7 @@ def test_cli_evaluate_many_on_a_cluster_prints_rows_summary_and_fails_for_a_bad_
     out_w, out_s = tmp_path / "w.json", tmp_path / "s.json"
     bad = tmp_path / "not-a-log.mcap"
     bad.write_text("hello")
-    args = ["evaluate", *map(str, short_demos), str(bad)]
+    args = ["evaluate", *map(str, short_demos), str(bad), "--folds", str(FOLDS)]
     res = CliRunner(env={"COLUMNS": "200"}).invoke(app, [*args, "--scheduler", address, "--json", str(out_w)])
     assert res.exit_code == 1, res.output
     assert "error: " in res.output and "not-a-log.mcap" in res.output
@@ -88,7 +94,9 @@ def test_cli_evaluate_many_on_a_cluster_prints_rows_summary_and_fails_for_a_bad_
     assert out_w.read_bytes() == out_s.read_bytes()
     entry = json.loads(out_s.read_text())["logs"][0]
     one = tmp_path / "one.json"
-    res = CliRunner().invoke(app, ["evaluate", str(short_demos[0]), "--json", str(one)])
+    res = CliRunner().invoke(
+        app, ["evaluate", str(short_demos[0]), "--folds", str(FOLDS), "--json", str(one)]
+    )
     assert res.exit_code == 0, res.output
     single = json.loads(one.read_text())  # one log: today's object, the same numbers as in a batch
     assert single == {k: v for k, v in entry.items() if k not in ("path", "prepared")}

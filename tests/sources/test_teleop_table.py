@@ -367,14 +367,3 @@ def test_a_collision_while_the_person_drives_is_the_persons_not_the_networks(tmp
     assert c["takeovers"] == 1 and c["person_collisions"] >= 1, c
     assert result.report["collisions"] + c["person_collisions"] == result.teleop.run.collisions
     assert result.report["collisions"] == result.teleop.run.collisions - c["person_collisions"]
-
-
-def test_a_keyboard_correction_is_segmented_by_the_persons_keys(tmp_path: Path) -> None:
-    """The network's smooth commands are not the person's: a keyboard correction is discrete."""
-    from lfdfuse.segment.pipeline import segment_file
-    from tests.sources.teleop.correction import correction_log
-
-    path, _person = correction_log(tmp_path)
-    seg = tmp_path / "correction.seg.mcap"
-    segment_file(path, out=seg, lag_s=None)  # as `lfdfuse segment` does
-    assert file_info(seg).metadata["lfdfuse"]["segment_commands"] == "discrete"
