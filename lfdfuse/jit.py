@@ -63,10 +63,9 @@ def _signals_held() -> Iterator[None]:
         held.append(signum)
 
     previous: dict[int, Any] = {}
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        handler = signal.getsignal(sig)
-        if handler is not None:  # installed from outside Python: left alone
-            previous[sig] = signal.signal(sig, hold)
+    for wanted in (signal.SIGINT, signal.SIGTERM):
+        if signal.getsignal(wanted) is not None:  # installed from outside Python: left alone
+            previous[wanted] = signal.signal(wanted, hold)
     try:
         yield
     finally:
