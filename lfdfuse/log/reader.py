@@ -17,6 +17,7 @@ from mcap.reader import make_reader
 
 from lfdfuse.errors import LogError
 from lfdfuse.log.messages import PROVENANCE, RawMessage, from_stamp
+from lfdfuse.log.ordered import in_log_time_order
 from lfdfuse.log.run import MAX_BEAMS, RUN_TOPICS, Run, RunBuilder, hold, meta_float
 from lfdfuse.log.stamps import check_log_time
 from lfdfuse.progress import Progress, tell
@@ -167,16 +168,10 @@ def iter_records(
         try:
             reader = make_reader(stream)
             wanted = None if topics is None else list(topics)
-            for schema, channel, message in reader.iter_messages(topics=wanted, log_time_order=True):
+            for schema, channel, log_time, _publish, data in in_log_time_order(reader, stream, wanted):
                 if check_times:
-                    check_log_time(path, channel.topic, message.log_time)
-                yield (
-                    channel.topic,
-                    schema.name if schema else "",
-                    channel.message_encoding,
-                    message.log_time,
-                    message.data,
-                )
+                    check_log_time(path, channel.topic, log_time)
+                yield (channel.topic, schema.name if schema else "", channel.message_encoding, log_time, data)
         except _READ_ERRORS as exc:
             raise _unreadable(path, exc) from exc
 
@@ -194,20 +189,20 @@ def iter_raw(path: str | Path, *, exclude_prefix: str | None = None) -> Iterator
     with _open(path) as stream:
         try:
             reader = make_reader(stream)
-            for schema, channel, message in reader.iter_messages(log_time_order=True):
+            for schema, channel, log_time, publish_time, data in in_log_time_order(reader, stream):
                 if exclude_prefix is not None and channel.topic.startswith(exclude_prefix):
                     continue
-                check_log_time(path, channel.topic, message.log_time)
-                check_log_time(path, channel.topic, message.publish_time)
+                check_log_time(path, channel.topic, log_time)
+                check_log_time(path, channel.topic, publish_time)
                 yield RawMessage(
                     channel.topic,
                     schema.name if schema else "",
                     schema.encoding if schema else "",
                     schema.data if schema else b"",
                     channel.message_encoding,
-                    message.log_time,
-                    message.publish_time,
-                    message.data,
+                    log_time,
+                    publish_time,
+                    data,
                 )
         except _READ_ERRORS as exc:
             raise _unreadable(path, exc) from exc
