@@ -50,7 +50,7 @@ from lfdfuse.sources.importers import require_lfdfuse_log
 
 # the shares of a segment run's time (a 30-minute demo, profiled): reading the log, the
 # behaviour primitives, the lag search, and writing the segmented copy
-_READ, _COMPUTE, _LAG, _WRITE = 0.4, 0.15, 0.1, 0.35
+_READ, _COMPUTE, _LAG, _WRITE = 0.25, 0.05, 0.04, 0.66
 
 
 @dataclass(frozen=True)
