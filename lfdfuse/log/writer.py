@@ -52,7 +52,9 @@ class _Messages:
         except (AttributeError, AssertionError):
             return None
 
-    def add(self, channel_id: int, t_ns: int, data: bytes, sequence: int) -> None:
+    def add(
+        self, channel_id: int, t_ns: int, data: bytes, sequence: int, publish_ns: int | None = None
+    ) -> None:
         stats, chunk = self.stats, self.chunk
         if stats.message_count == 0:
             stats.message_start_time = t_ns
@@ -72,7 +74,10 @@ class _Messages:
             index = chunk.message_indices[channel_id] = MessageIndex(channel_id=channel_id, records=[])
         index.records.append((t_ns, buffer.tell()))
         chunk.num_messages += 1
-        buffer.write(_MESSAGE_HEAD.pack(_MESSAGE_OPCODE, 22 + len(data), channel_id, sequence, t_ns, t_ns))
+        published = t_ns if publish_ns is None else publish_ns
+        buffer.write(
+            _MESSAGE_HEAD.pack(_MESSAGE_OPCODE, 22 + len(data), channel_id, sequence, t_ns, published)
+        )
         buffer.write(data)
         if buffer.tell() > self.limit:
             self.finalize()
@@ -180,14 +185,17 @@ class LogWriter:
             )
             self._channels[key] = ch
             self._seq[key] = 0
-        self._seq[key] += 1
-        self._writer.add_message(
-            channel_id=ch,
-            log_time=raw.log_time_ns,
-            publish_time=raw.publish_time_ns,
-            data=raw.data,
-            sequence=self._seq[key],
-        )
+        seq = self._seq[key] = self._seq[key] + 1
+        if self._messages is not None:
+            self._messages.add(ch, raw.log_time_ns, raw.data, seq, raw.publish_time_ns)
+        else:
+            self._writer.add_message(
+                channel_id=ch,
+                log_time=raw.log_time_ns,
+                publish_time=raw.publish_time_ns,
+                data=raw.data,
+                sequence=seq,
+            )
 
     def add_metadata(self, name: str, data: dict[str, str]) -> None:
         """An extra metadata record (the provenance record is written on close)."""
