@@ -231,7 +231,7 @@ def teleop_cmd(
         ):
             summary = drive(session)
     print_run(summary.run, title=f"teleop {w.name} / {opts.input_name}")
-    console.print(f"  ended      {summary.ended} ({summary.inputs} inputs)")
+    console.print(f"  ended      {summary.ended} ({counted(summary.inputs, 'input')})")
     if result is not None:
         c = result.report["correction"]
         console.print(

@@ -200,6 +200,8 @@ def test_scripts_in_yaml_and_csv(tmp_path: Path) -> None:
         ([{"t": 0, "twist": [0]}], "twist must be"),
         ([{"t": 0, "speed": 1}], "unknown key 'speed'"),
         ([{"t": 0, "twist": ["a", 0]}], "must be a number"),
+        ([{"t": 0, "key": "foo"}], "entry 1: key 'foo' is not a key name"),
+        ([{"t": 0, "key": "i"}, {"t": 1, "key": "upp"}], "entry 2: key 'upp'"),
     ],
 )
 def test_bad_scripts_name_the_entry(data: Any, needle: str) -> None:

@@ -89,6 +89,17 @@ class KeyEffect:
     known: bool = True
 
 
+def is_key_name(name: str) -> bool:
+    """A key a keyboard can send: one printable character, or a named key (``up``, ``space``,
+    ``esc``, ``enter`` …). An unbound key is still a key (it stops the robot); ``foo`` is not.
+
+    >>> [is_key_name(k) for k in ("i", "up", "space", "esc", "a", "foo", "")]
+    [True, True, True, True, True, False, False]
+    """
+    named = {*MOVES, *SCALES, *STOPS, *QUITS, *_CSI_FINAL.values(), *_NAMED.values()}
+    return name in named or (len(name) == 1 and name.isprintable())
+
+
 def press(state: KeyState, key: str, limits: DriveParams | None = None) -> KeyEffect:
     """Apply one key name to a state. Speeds stay within the robot's limits.
 

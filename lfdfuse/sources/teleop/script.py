@@ -36,6 +36,7 @@ from typing import Any
 from lfdfuse.errors import ConfigError
 from lfdfuse.files import parse_yaml as read_yaml_text
 from lfdfuse.sources.teleop.inputs import Input
+from lfdfuse.sources.teleop.keys import is_key_name
 
 SOURCE = "script"
 TWIST_SCHEMA = "geometry_msgs/msg/Twist"
@@ -138,8 +139,11 @@ def parse_yaml(data: Any, *, name: str = "script") -> list[ScriptEntry]:
             raise ConfigError(f"{where}: give exactly one of key, twist, end, handback")
         t = _seconds(item["t"], f"{where}: t")
         if what[0] == "key":
-            if not isinstance(item["key"], str) or not item["key"]:
-                raise ConfigError(f"{where}: key must be a key name such as i, up, space, esc")
+            if not isinstance(item["key"], str) or not is_key_name(item["key"]):
+                raise ConfigError(
+                    f"{where}: key {str(item['key'])[:20]!r} is not a key name (a character, or up, down,"
+                    " left, right, space, esc, enter)"
+                )
             out.append(key_entry(t, item["key"]))
         elif what[0] == "twist":
             tw = item["twist"]
@@ -168,6 +172,10 @@ def parse_csv(text: str, *, name: str = "script") -> list[ScriptEntry]:
         t = _seconds(row.get("t"), f"{where}: t")
         key = (row.get("key") or "").strip()
         if key:
+            if not is_key_name(key):
+                raise ConfigError(
+                    f"{where}: key {key[:20]!r} is not a key name (a character, or up, space, esc …)"
+                )
             out.append(key_entry(t, key))
         else:
             out.append(

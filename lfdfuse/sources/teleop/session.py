@@ -238,10 +238,10 @@ class TeleopSession:
         return max(0.0, self.clock.now() - self._t0)
 
     def _apply(self, inp: Input, t: float) -> None:
-        self.inputs_seen += 1
-        if inp.kind == "end":
+        if inp.kind == "end":  # a script's end, stated or implied, is nobody's input
             self._end(inp.text or "end", t, inp)
             return
+        self.inputs_seen += 1
         if self.end_reason:
             self._note(inp, "ignored", t)
             return
