@@ -60,6 +60,17 @@ def three_goal_segmented(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture(scope="session")
+def keep_left_segmented(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``sample_logs/keep-left-building.mcap`` segmented as ``lfdfuse segment`` does by default,
+    once per session: tests read it and write nothing beside it."""
+    from lfdfuse.segment.pipeline import segment_file
+
+    out = tmp_path_factory.mktemp("keep-left") / "keep-left.seg.mcap"
+    segment_file(ROOT / "sample_logs" / "keep-left-building.mcap", out=out)
+    return out
+
+
+@pytest.fixture(scope="session")
 def three_goal_table(three_goal_segmented: Path) -> Any:
     """The table the default estimate learns from :func:`three_goal_segmented` (a frozen
     ``FusionTable``), learned once per session for every test that drives or reads it."""
