@@ -25,9 +25,12 @@ False
 from __future__ import annotations
 
 import os
+import signal
+import threading
 import types
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from typing import Any
 
 #: environment variable choosing the kernels: ``numba`` (the default) or ``numpy``
@@ -45,6 +48,41 @@ def _first_line(exc: BaseException) -> str:
     """An exception's message as one line (numba's typing errors run to dozens of lines)."""
     lines = str(exc).strip().splitlines()
     return lines[0].strip() if lines else type(exc).__name__
+
+
+@contextmanager
+def _signals_held() -> Iterator[None]:
+    """Ctrl-C and SIGTERM wait while numba imports, compiles or loads its cache, then act.
+
+    LLVM calls back into Python there (its object cache), and an exception raised inside such a
+    callback is swallowed ("Exception ignored"): the interrupt would be lost, or the process
+    would die by the signal after the command had handled it. Held here, the signal reaches the
+    handler it was meant for once the kernel is ready (a few seconds at most, once per install).
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    held: list[int] = []
+
+    def hold(signum: int, frame: Any) -> None:
+        held.append(signum)
+
+    previous: dict[int, Any] = {}
+    for wanted in (signal.SIGINT, signal.SIGTERM):
+        if signal.getsignal(wanted) is not None:  # installed from outside Python: left alone
+            previous[wanted] = signal.signal(wanted, hold)
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        if held:
+            first = held[0]
+            handler = previous[first]
+            if callable(handler):
+                handler(first, None)  # raises KeyboardInterrupt, or the command's own exception
+            elif handler == signal.SIG_DFL:
+                signal.raise_signal(first)
 
 
 def _import_numba() -> Any:
@@ -79,6 +117,7 @@ class Kernel:
         self.calls = tuple(calls)
         self._compiled: Callable[..., Any] | None = None
         self._failed = False
+        self._warm = False  # called once: compiled for its argument types, or loaded from the cache
 
     def ready(self) -> bool:
         """True when the compiled loop can run: compiled kernels are wanted, numba imports and
@@ -87,6 +126,10 @@ class Kernel:
             return False
         if self._compiled is not None:
             return True
+        with _signals_held():
+            return self._compile()
+
+    def _compile(self) -> bool:
         numba = _import_numba()
         if numba is None:
             self._failed = True
@@ -113,7 +156,12 @@ class Kernel:
         if self._compiled is None and not self.ready():
             raise RuntimeError("compiled kernel called without ready(): call its numpy reference instead")
         assert self._compiled is not None
-        return self._compiled(*args)
+        if self._warm:
+            return self._compiled(*args)
+        with _signals_held():  # without a signature, numba compiles (or loads) on the first call
+            result = self._compiled(*args)
+        self._warm = True
+        return result
 
 
 def _with_compiled(

@@ -14,8 +14,9 @@ from lfdfuse.estimate.methods import REGISTRY, EstimateOptions, Likelihood, Meth
 from lfdfuse.estimate.paper import PFParams
 from lfdfuse.estimate.smc import SMCParams
 from lfdfuse.learn import LearnOptions, learn
-from lfdfuse.network.table import write_table
+from lfdfuse.network.table import load_table, write_table
 from lfdfuse.segment.commands import CommandChoice
+from lfdfuse.words import counted
 
 
 @app.command("estimate")
@@ -88,11 +89,17 @@ def estimate_cmd(
         res = learn(srcs, options=LearnOptions(estimate=opts, subgoals=subgoals), progress=update)
     write_table(res.table, out)
     what = str(srcs[0]) if len(srcs) == 1 else f"{len(srcs)} demos"
-    console.print(
-        f"[bold]estimate[/bold] {what} → {out}  ({method}, {trials} trial{'s' if trials > 1 else ''}, {res.groups} groups)"
-    )
-    print_table(res.table)
-    print_changes(res.table)
+    rows = res.groups - res.skipped
+    kept = f"{res.groups} groups" if not res.skipped else f"{res.groups} groups, {rows} rows"
+    console.print(f"[bold]estimate[/bold] {what} → {out}  ({method}, {counted(trials, 'trial')}, {kept})")
+    if res.skipped:
+        console.print(
+            f"  {counted(res.skipped, 'group')} had no informative step (standing still or reversing"
+            " throughout): no row, the default weights drive there"
+        )
+    written = load_table(out)  # shown as written: the numbers inspect shows, rounded once
+    print_table(written)
+    print_changes(written)
     if res.repair is not None:
         for line in res.repair.describe():
             console.print(line, markup=False)

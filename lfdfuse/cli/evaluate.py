@@ -14,6 +14,7 @@ from lfdfuse.cli.common import check_outputs, console, seed_option, user_errors
 from lfdfuse.cli.evaluate_corpus import print_corpus
 from lfdfuse.cli.evaluate_many import print_logs
 from lfdfuse.cli.parallel import follow, one_executor, scheduler_option, workers_option
+from lfdfuse.cli.tables import show
 from lfdfuse.estimate.methods import POINT_FITS, REGISTRY
 from lfdfuse.evaluate.batch import evaluate_logs
 from lfdfuse.evaluate.cloning import SECTORS
@@ -146,7 +147,7 @@ def evaluate_cmd(
         table.add_column(f"commands ({ev.test_decisions} decisions)", justify="right")
     for name, s in ev.methods.items():
         table.add_row(name, *_cells(ev, s))
-    console.print(table)
+    show(table)
     what = _WHAT_FOLDS if kfold else _WHAT
     console.print("  " + "; ".join(f"{k}: {v}" for k, v in what.items() if k in ev.methods) + ".")
     for line in [*reading(ev), *(reading_folds(ev) if kfold else [])]:

@@ -9,7 +9,7 @@ from typing import Any
 from rich.table import Table
 
 from lfdfuse.cli.common import console
-from lfdfuse.cli.parallel import print_wide
+from lfdfuse.cli.tables import show
 from lfdfuse.evaluate.batch import LogEvaluation, LogsResult
 from lfdfuse.evaluate.folds import KFOLD_METHODS
 
@@ -74,7 +74,7 @@ def print_corpus(res: LogsResult) -> None:
         f"[bold]evaluate[/bold] {n + failed} logs, each in blocked folds over its informative decisions:"
         f" mean absolute held-out heading error (°){fail}"
     )
-    print_wide(table)
+    show(table)
     if n == 0:
         console.print("  no log could be evaluated")
         return
@@ -86,7 +86,7 @@ def print_corpus(res: LogsResult) -> None:
         f"  fused against each method over the {n} scored logs (Δ = fused − method, per log; median over"
         " the logs and its 95 % bootstrap interval):"
     )
-    print_wide(_compare_table(summary["compare"]))
+    show(_compare_table(summary["compare"]))
 
 
 def _cmp_cells(c: dict[str, Any], *, percent: bool = False) -> list[str]:

@@ -7,7 +7,7 @@ from pathlib import Path
 from rich.table import Table
 
 from lfdfuse.cli.common import console
-from lfdfuse.cli.parallel import print_wide
+from lfdfuse.cli.tables import show
 from lfdfuse.evaluate.batch import BASELINES, LogEvaluation, LogsResult
 from lfdfuse.evaluate.holdout import METHODS
 
@@ -38,7 +38,7 @@ def print_logs(res: LogsResult) -> None:
     n, failed = summary["logs"], summary["failed"]
     fail = f", {failed} could not be evaluated" if failed else ""
     console.print(f"[bold]evaluate[/bold] {n + failed} logs: mean absolute held-out heading error (°){fail}")
-    print_wide(table)
+    show(table)
     if n == 0:
         console.print("  no log could be evaluated")
         return

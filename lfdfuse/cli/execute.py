@@ -68,7 +68,7 @@ def execute_cmd(
 
     Examples:
       lfdfuse execute fusion.yaml --world building -o run.mcap --report run.json
-      lfdfuse execute fusion.yaml --world tee --start 1,9,0 --max-time 120
+      lfdfuse execute left.yaml --world tee --start 1,9,0 --max-time 120
       lfdfuse execute task.yaml --starts 10 --workers 2 --report rate.json
     """
     if starts is not None and out is not None:

@@ -10,7 +10,8 @@ import typer
 from rich.table import Table
 
 from lfdfuse.cli.common import console
-from lfdfuse.cli.parallel import follow, print_wide
+from lfdfuse.cli.parallel import follow
+from lfdfuse.cli.tables import show
 from lfdfuse.errors import ConfigError
 from lfdfuse.execute.starts import MAX_STARTS, StartsOptions, StartsResult, run_starts
 from lfdfuse.files import write_text_atomic
@@ -59,7 +60,7 @@ def print_starts(res: StartsResult, *, table: str) -> None:
         done = "-" if r["completed"] is None else ("yes" if r["completed"] else "no")
         goals = f"{sum(g['reached'] for g in r['goals'])}/{len(r['goals'])}" if r["goals"] else "-"
         rows.add_row(str(k), where, done, goals, str(r["collisions"]), f"{r['duration_s']:.1f}", _styles(r))
-    print_wide(rows)
+    show(rows)
     fail = f" ({res.failed} failed to run)" if res.failed else ""
     if res.completed is None or res.ci95 is None or res.rate is None:
         head = f"[bold]execute[/bold] {table}: {res.ran} runs{fail}; the network has no goals, nothing to complete"

@@ -10,8 +10,8 @@ from rich.table import Table
 
 from lfdfuse.cli.app import app
 from lfdfuse.cli.common import console, user_errors
-from lfdfuse.cli.parallel import print_wide
 from lfdfuse.cli.render import print_changes, print_provenance, print_segments, print_subgoals, print_table
+from lfdfuse.cli.tables import show
 from lfdfuse.errors import ConfigError
 from lfdfuse.files import YamlKind, kind_of, read_yaml
 from lfdfuse.log.messages import PROVENANCE
@@ -74,7 +74,7 @@ def inspect(
     table.add_column("messages", justify="right")
     for topic, (schema, enc, count) in info.channels.items():
         table.add_row(topic, schema, enc, str(count))
-    print_wide(table)
+    show(table)
     for name, data in info.metadata.items():
         if name == PROVENANCE:
             console.print(
@@ -137,7 +137,7 @@ def print_log_summary(s: LogSummary) -> None:
     table.add_column("serialization")
     for t in s.topics:
         table.add_row(t.topic, t.msgtype, str(t.count), t.serialization)
-    print_wide(table)
+    show(table)
     plan = s.plan
     if plan.problem is not None:
         console.print(f"  import would refuse it: {plan.problem}")

@@ -6,12 +6,9 @@ from collections.abc import Iterable
 from typing import Any
 
 import typer
-from rich.console import Console
-from rich.measure import Measurement
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
-from rich.table import Table
 
-from lfdfuse.cli.common import console, err_console
+from lfdfuse.cli.common import err_console
 from lfdfuse.parallel import MAX_WORKERS, Event
 
 
@@ -67,13 +64,3 @@ def follow(label: str, events: Iterable[Event]) -> int:
                 description=f"running {ev.running}, failed {ev.failed}",
             )
     return failed
-
-
-def print_wide(table: Table) -> None:
-    """A table whole when piped (a file has no screen width to fit), fitted to the screen on a terminal."""
-    if console.is_terminal:
-        console.print(table)
-        return
-    need = Measurement.get(console, console.options.update_width(10_000), table).maximum
-    # console.print(width=) never exceeds the console's own width: a console as wide as the table
-    Console(highlight=False, width=max(console.width, need)).print(table)

@@ -44,7 +44,7 @@ def plot_cmd(
     Examples:
       lfdfuse plot demo.seg.mcap -o demo.png
       lfdfuse plot run.mcap -o run.svg
-      lfdfuse plot fusion.yaml -o weights.png --whiskers trial_std
+      lfdfuse plot trials.yaml -o weights.png --whiskers trial_std
     """
     from lfdfuse.viz.plot import plot_file  # matplotlib only when plotting: `lfdfuse --help` stays fast
 

@@ -9,6 +9,7 @@ from rich.table import Table
 
 from lfdfuse.behaviors.names import abbreviation, legend_entry
 from lfdfuse.cli.common import console
+from lfdfuse.cli.tables import show
 from lfdfuse.execute.report import help_line, verdict
 from lfdfuse.network.table import FusionRow, FusionTable, Network
 from lfdfuse.segment.goals import Segmentation, bac_summary
@@ -85,10 +86,12 @@ def print_table(table: FusionTable) -> None:
         if show_std
         else f"weights in % of the row ({by.get('method')} has no uncertainty: --trials K bootstraps one)"
     )
+    # a least-squares fit has no prior: where the data cannot tell weights apart, it picks one fit
+    undecided = "one of many equal fits" if is_point_fit(by.get("method")) else "the prior decides"
     console.print(
         "BAC = the set of applicable behaviours (bit i = the i-th below; a blank weight: not applicable); "
         f"{spread}; n = samples (* = too few to trust); fit° = mean heading error;"
-        f" BAC? = not identifiable (the prior decides)\n{legend}"
+        f" BAC? = not identifiable ({undecided})\n{legend}"
     )
 
     def walk(net: Network, depth: int) -> None:
@@ -120,18 +123,20 @@ def print_table(table: FusionTable) -> None:
                 fit = f"{row.fit_error_deg:.1f}" if row.fit_error_deg is not None else ""
                 t.add_row(f"{row.bac}{'?' if row.identifiable is False else ''}", n, fit, *cells)
             if step.fusion:
-                console.print(t)
+                show(t)
             else:
                 console.print("    (no informative steps: default weights)")
 
     walk(table.network, 0)
     few = [r for r in _rows(table.network) if r.low_samples]
+    point = is_point_fit(table.estimated_by.get("method"))
+    little = "a fit to so few says little" if point else "their weights say little more than the prior"
     if few:
         least = min(r.samples or 0 for r in few)
         console.print(
             f"[bold]{len(few)} of {len(_rows(table.network))} row(s) learned from too few samples[/bold] (n*,"
-            f" fewer than {EstimateOptions().min_samples}; the least {least}): their weights say little"
-            " more than the prior; demonstrate those situations longer"
+            f" fewer than {EstimateOptions().min_samples}; the least {least}): {little};"
+            " demonstrate those situations longer"
         )
 
 

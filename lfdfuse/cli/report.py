@@ -48,7 +48,7 @@ def report_cmd(
       lfdfuse report -o build/paper-x4 --scale 4 --workers 2
     """
     one_executor(workers, scheduler)
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     from lfdfuse.evaluate.paper.compare import rows
     from lfdfuse.evaluate.paper.suite import PaperOptions, run_experiments
@@ -63,6 +63,7 @@ def report_cmd(
         TextColumn("{task.completed}/{task.total}"),
         TextColumn("{task.description}"),
         TimeElapsedColumn(),
+        TimeRemainingColumn(),
         console=err_console,
         transient=True,
         disable=not err_console.is_terminal,
@@ -71,7 +72,13 @@ def report_cmd(
         opts = PaperOptions(logs=out / "logs", seed=seed, quick=quick, scale=scale)
         with open_executor(workers=workers, scheduler=scheduler) as executor:
             for ev in run_experiments(opts, executor=executor):
-                bar.update(task, total=ev.total + 1, completed=ev.done, description=ev.label)
+                last = f"; last: {ev.label}" if ev.done else f"; {ev.label}"
+                bar.update(
+                    task,
+                    total=ev.total + 1,
+                    completed=ev.done,
+                    description=f"running {ev.running}{last}",
+                )
                 results = ev.results or results
         assert results is not None
         bar.update(task, description="figures")

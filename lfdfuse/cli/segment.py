@@ -57,8 +57,10 @@ def segment_cmd(
         raise ConfigError(f"{src} is segmented already: give -o to segment it again under another name")
     target = out or default_out(src, ".seg")
     check_outputs([target], [src])
-    with progress_bar("segment"):
-        res = segment_file(src, out=target, behaviors=behaviors, lag_s=lag_s, commands=commands.mode)
+    with progress_bar("segment") as progress:
+        res = segment_file(
+            src, out=target, behaviors=behaviors, lag_s=lag_s, commands=commands.mode, progress=progress
+        )
     console.print(f"[bold]segment[/bold] {src} → {res.out}")
     console.print(f"  behaviours: {', '.join(res.names)}")
     still = int((~res.informative).sum())

@@ -5,7 +5,8 @@ from __future__ import annotations
 from rich.table import Table
 
 from lfdfuse.cli.app import app
-from lfdfuse.cli.common import console, user_errors
+from lfdfuse.cli.common import user_errors
+from lfdfuse.cli.tables import show
 from lfdfuse.world.model import world_descriptions
 
 
@@ -22,4 +23,4 @@ def worlds() -> None:
     table.add_column("description")
     for name, desc in world_descriptions():
         table.add_row(name, desc)
-    console.print(table)
+    show(table)

@@ -47,13 +47,26 @@ def limits_of(
     imported robot's log has them), else the simulated robot's; clamped by the options."""
     base = DriveParams()
     stated = stated_limits(estimated_by)
-    whence = "the table's robot" if None not in stated else "the simulated robot's: the table does not say"
     got = [stated[0] or base.v_max_mps, stated[1] or base.omega_max_rps]
     for name, opt in (("--max-speed", max_speed), ("--max-turn", max_turn)):
         if opt is not None and not (math.isfinite(opt) and opt > 0):
             raise ConfigError(f"{name} must be a positive number")
     v = min(got[0], max_speed) if max_speed is not None else got[0]
     w = min(got[1], max_turn) if max_turn is not None else got[1]
+    # where each limit comes from: the option that clamped it, the table's robot, or ours
+    sources = [
+        opt if value < own else ("the table's robot" if said is not None else "the simulated robot's")
+        for opt, value, own, said in (
+            ("--max-speed", v, got[0], stated[0]),
+            ("--max-turn", w, got[1], stated[1]),
+        )
+    ]
+    if sources[0] == sources[1]:
+        whence = sources[0]
+    else:
+        whence = f"speed: {sources[0]}; turn: {sources[1]}"
+    if "the simulated robot's" in sources:
+        whence += " (the table does not say)"
     return Limits(v, w), whence
 
 

@@ -69,6 +69,7 @@ def estimate_runs(
     if len(runs) > 1:
         by["sources"] = list(names)
         by["source_commands"] = list(est.source_commands)  # each demo's own command model
+        by["source_lags_s"] = [r.metadata.get("segment_lag_s") for r in runs]  # each demo's own lag
     table = FusionTable(
         runs[0].names,
         est.default_weights or default_weights_for(runs[0].names),

@@ -19,6 +19,7 @@ from lfdfuse.errors import LogError
 from lfdfuse.log.messages import PROVENANCE, RawMessage, from_stamp
 from lfdfuse.log.run import MAX_BEAMS, RUN_TOPICS, Run, RunBuilder, hold, meta_float
 from lfdfuse.log.stamps import check_log_time
+from lfdfuse.progress import Progress, tell
 
 #: the first bytes of every MCAP file
 MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -257,15 +258,22 @@ def file_info(path: str | Path) -> FileInfo:
     return FileInfo(channels, start, end, metadata, attachments, header.library)
 
 
-def read_run(path: str | Path) -> Run:
+def read_run(path: str | Path, *, progress: Progress | None = None) -> Run:
     """Load an lfdfuse log (simulated, executed or imported) into arrays: its summary, one pass
     over its :data:`~lfdfuse.log.run.RUN_TOPICS` (:class:`~lfdfuse.log.run.RunBuilder`), and the
-    attached world file. Every malformed message is a :class:`LogError` naming it.
+    attached world file. Every malformed message is a :class:`LogError` naming it. ``progress``
+    hears how far into the log's time span the pass is.
     """
     info = file_info(path)
     builder = run_builder(path, info)
-    for topic, _schema, enc, t_ns, data in iter_records(path, topics=RUN_TOPICS, check_times=False):
+    span = max(info.end_ns - info.start_ns, 1)
+    for i, (topic, _schema, enc, t_ns, data) in enumerate(
+        iter_records(path, topics=RUN_TOPICS, check_times=False)
+    ):
         builder.feed(topic, enc, t_ns, data)
+        if progress is not None and i % 512 == 0:
+            tell(progress, min(max(t_ns - info.start_ns, 0), span), span)
+    tell(progress, span, span)
     return finish_run(path, info, builder)
 
 

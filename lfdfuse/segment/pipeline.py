@@ -30,6 +30,7 @@ from lfdfuse.errors import LogError
 from lfdfuse.log import lfd
 from lfdfuse.log.reader import check_log_file, iter_attachments, iter_raw, meta_float, read_run
 from lfdfuse.log.writer import LogWriter
+from lfdfuse.progress import Progress, part, tell
 from lfdfuse.robot.limits import stated_limits
 from lfdfuse.segment.commands import detect_commands
 from lfdfuse.segment.demo import demonstrated, lag_ns_of, observations_of
@@ -46,6 +47,10 @@ from lfdfuse.segment.lag import (
 from lfdfuse.segment.read import AUTHORITY_TOPIC, network_ticks
 from lfdfuse.sim.robot import RobotParams
 from lfdfuse.sources.importers import require_lfdfuse_log
+
+# the shares of a segment run's time (a 30-minute demo, profiled): reading the log, the
+# behaviour primitives, the lag search, and writing the segmented copy
+_READ, _COMPUTE, _LAG, _WRITE = 0.4, 0.15, 0.1, 0.35
 
 
 @dataclass(frozen=True)
@@ -99,6 +104,7 @@ def segment_file(
     lag_s: float | None = 0.0,
     measure_lag: bool = True,
     commands: str = "auto",
+    progress: Progress | None = None,
 ) -> SegmentResult:
     """Read a demo log, compute behaviours, segment, and write the segmented log to ``out``.
 
@@ -107,7 +113,8 @@ def segment_file(
     simulated robot's. ``lag_s`` None (``--lag auto``, the command line's default) pairs each scan with the command of the
     best-explaining lag (:mod:`~lfdfuse.segment.lag`); ``commands`` (``auto``, ``continuous``,
     ``discrete``) is the command model estimate will use (:mod:`~lfdfuse.segment.commands`). A lag outside the lags the search covers is refused: the summary could
-    not say whether it explains the demo.
+    not say whether it explains the demo. ``progress`` hears the whole job's share done
+    (reading, the primitives, the lag search and writing, by their measured cost).
     """
     lo, hi = min(CANDIDATE_LAGS_S), max(CANDIDATE_LAGS_S)
     if lag_s is not None and math.isfinite(lag_s) and not lo <= lag_s <= hi:
@@ -119,7 +126,7 @@ def segment_file(
     if Path(out).resolve() == Path(src).resolve():
         raise LogError(f"the output {out} would overwrite the input: give another -o")
     require_lfdfuse_log(src)
-    run = read_run(src)
+    run = read_run(src, progress=part(progress, start=0.0, size=_READ, total=1.0))
     if drive is None:
         drive = drive_params_of(run.metadata)
     if len(run) == 0:
@@ -130,6 +137,7 @@ def segment_file(
         reach = meta_float(run.metadata, "camera_reach_m", BehaviorParams().reach_m)
         params = BehaviorParams(reach_m=reach)
     outputs = compute_in_chunks(obs, names, params)
+    tell(progress, _READ + _COMPUTE, 1.0)
     segm = segment_outputs(outputs)
     mode = detect_commands(run.cmd_v_mps, run.cmd_omega_rps, run.metadata, run.topics, commands)
     fits = tuple(lag_fits(run, outputs, drive)) if measure_lag or lag_s is None else ()
@@ -139,6 +147,7 @@ def segment_file(
             presses = tuple(press_lag_fits(run, outputs, drive, lag_s))
             if min((f.steps for f in presses), default=0) >= MIN_PRESSES:
                 fits, lag_s = presses, best_lag(presses)
+    tell(progress, _READ + _COMPUTE + _LAG, 1.0)
     lag_ns = lag_ns_of(lag_s)
     vr, ok = demonstrated(run, drive, lag_ns=lag_ns)
     # a correction log (teleop --table): the network's own ticks are the learner's, not the
@@ -164,7 +173,11 @@ def segment_file(
         # encoded lazily (a list of every message would grow with the log)
         lfd_msgs = _lfd_messages(run.t_ns, outputs, segm, vr, ok)
         pending = next(lfd_msgs, None)
+        writing = part(progress, start=1.0 - _WRITE, size=_WRITE, total=1.0)
+        t0 = int(run.t_ns[0]) if len(run.t_ns) else 0
+        span = max(int(run.t_ns[-1]) - t0, 1) if len(run.t_ns) else 1
         # copy every input channel (but our own, which we replace) interleaved in time order
+        copied = 0
         for raw in iter_raw(src):
             if raw.topic.startswith("/lfd/") and raw.topic != AUTHORITY_TOPIC:
                 continue  # ours, replaced (who drove is the input's: it stays)
@@ -172,9 +185,13 @@ def segment_file(
                 log.write_raw(*pending)
                 pending = next(lfd_msgs, None)
             log.copy(raw)
+            copied += 1
+            if writing is not None and copied % 512 == 0:
+                writing(min(max(raw.log_time_ns - t0, 0), span), span)
         while pending is not None:
             log.write_raw(*pending)
             pending = next(lfd_msgs, None)
+    tell(progress, 1.0, 1.0)
     return SegmentResult(tuple(names), segm, run.t_ns, ok, str(out), lag_s, fits)
 
 

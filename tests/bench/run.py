@@ -15,6 +15,7 @@ import importlib
 import json
 import math
 import tempfile
+import time
 from pathlib import Path
 from typing import Any, Literal
 
@@ -86,11 +87,16 @@ def main(
     console = Console(highlight=False)
     if not console.is_terminal:
         console.width = 100
+    for name in suite:
+        if name not in SUITES:
+            raise typer.BadParameter(f"unknown suite {name!r} (valid: {', '.join(SUITES)})")
+    before = _took(out)
     results: dict[str, list[dict[str, Any]]] = {}
+    took: dict[str, float] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for name in suite:
-            if name not in SUITES:
-                raise typer.BadParameter(f"unknown suite {name!r} (valid: {', '.join(SUITES)})")
+        for i, name in enumerate(suite, 1):
+            last = f"; it took {before[name]:.0f} s last time" if name in before else ""
+            console.print(f"suite {name} ({i} of {len(suite)}), started {time.strftime('%H:%M:%S')}{last}")
             try:
                 module = importlib.import_module(SUITES[name])
             except ModuleNotFoundError as exc:
@@ -99,11 +105,28 @@ def main(
             kwargs: dict[str, Any] = {"quick": quick}
             if name == "pipeline":
                 kwargs |= {"folder": Path(tmp), "only": only or None}
+            began = time.monotonic()
             results[name] = module.run(**kwargs)
-            render(console, f"{name}", results[name])
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(results, indent=1, default=str) + "\n")
+            took[name] = time.monotonic() - began
+            render(console, f"{name} ({took[name]:.0f} s)", results[name])
+            _write(out, results, took)  # each suite's rows as it ends: a stopped run keeps them
     console.print(f"wrote {out}")
+
+
+def _write(out: Path, results: dict[str, list[dict[str, Any]]], took: dict[str, float]) -> None:
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(out.name + ".tmp")
+    tmp.write_text(json.dumps({**results, "seconds": took}, indent=1, default=str) + "\n")
+    tmp.replace(out)
+
+
+def _took(out: Path) -> dict[str, float]:
+    """Each suite's duration in the last run written to ``out`` (none when there was none)."""
+    try:
+        seconds = json.loads(out.read_text()).get("seconds", {})
+        return {str(k): float(v) for k, v in seconds.items()}
+    except (OSError, ValueError, AttributeError, TypeError):
+        return {}
 
 
 if __name__ == "__main__":

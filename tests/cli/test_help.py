@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import inspect
 import re
+import shlex
+from pathlib import Path
 
 import pytest
 import typer
@@ -89,3 +91,22 @@ def test_the_root_help_lists_every_command() -> None:
         assert "<bool>" not in out, f"lfdfuse --help at {width}: a flag shown with a <bool> placeholder"
         for name in COMMANDS:
             assert re.search(rf"│ {name}\s", out), f"{name} missing from lfdfuse --help at {width}"
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_every_example_is_a_valid_command_line(name: str, tmp_path: Path) -> None:
+    """Each example, as written, names real options with values they accept (click parses it,
+    with every file it names present): a copied example never fails on its own usage."""
+    group = typer.main.get_group(app)
+    cmd = group.commands[name]
+    for ex in _examples(name):
+        args = shlex.split(ex)[2:]
+        with pytest.MonkeyPatch.context() as mp:
+            mp.chdir(tmp_path)
+            for a in args:
+                if re.search(r"\.(mcap|yaml|bag|gz|db3|json|png|svg)$", a) and "/" not in a:
+                    (tmp_path / a).touch()
+            try:
+                cmd.make_context(name, list(args))
+            except typer.TyperException as exc:  # typer's click: a usage error of any kind
+                pytest.fail(f"lfdfuse {name} --help example does not parse: {ex}\n{exc}")

@@ -28,9 +28,13 @@ def test_the_clamp_never_exceeds_the_limits(v: float, w: float) -> None:
 
 def test_limits_from_the_table_clamped_by_the_options() -> None:
     lim, whence = limits_of({"v_max_mps": 0.5, "omega_max_rps": 1.0}, max_speed=0.2, max_turn=None)
-    assert lim == Limits(0.2, 1.0) and whence == "the table's robot"
+    assert lim == Limits(0.2, 1.0) and whence == "speed: --max-speed; turn: the table's robot"
+    lim, whence = limits_of({"v_max_mps": 0.5, "omega_max_rps": 1.0}, max_speed=0.9, max_turn=None)
+    assert lim == Limits(0.5, 1.0) and whence == "the table's robot"  # an option above the robot's: no clamp
     lim, whence = limits_of({}, max_speed=None, max_turn=None)
-    assert lim.v_max_mps == 0.4 and "does not say" in whence
+    assert lim.v_max_mps == 0.4 and whence == "the simulated robot's (the table does not say)"
+    lim, whence = limits_of({}, max_speed=0.2, max_turn=None)  # the speed is the option's, not ours
+    assert lim.v_max_mps == 0.2 and whence.startswith("speed: --max-speed; turn: the simulated robot's")
     with pytest.raises(ConfigError):
         limits_of({}, max_speed=-1.0, max_turn=None)
 

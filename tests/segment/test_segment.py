@@ -109,13 +109,18 @@ def test_segmenting_is_deterministic_and_idempotent(
     tmp_path: Path, sample_dir: Path, keep_left_segmented: Path
 ) -> None:
     src = sample_dir / "keep-left-building.mcap"
-    first = keep_left_segmented  # the session's segmentation of src, default options
-    segment_file(src, out=tmp_path / "b.mcap")
-    assert first.read_bytes() == (tmp_path / "b.mcap").read_bytes()
-    segment_file(first, out=tmp_path / "c.mcap")  # a segmented file again
+    told: list[float] = []
+    segment_file(src, out=tmp_path / "a.mcap", progress=lambda done, total: told.append(done / total))
+    # the progress bar moves through reading and writing, never back, and ends full
+    assert told == sorted(told) and told[-1] == 1.0
+    assert len({round(f, 2) for f in told if 0.0 < f < 0.4}) >= 3  # while reading
+    assert len({round(f, 2) for f in told if 0.65 < f < 1.0}) >= 3  # while writing
+    # the session's segmentation of src (default options, another run): the same bytes
+    assert (tmp_path / "a.mcap").read_bytes() == keep_left_segmented.read_bytes()
+    segment_file(tmp_path / "a.mcap", out=tmp_path / "c.mcap")  # a segmented file again
     topics = [t for t, *_ in iter_messages(tmp_path / "c.mcap")]
     assert topics.count("/lfd/bac") == topics.count("/scan")  # replaced, not duplicated
-    a, c = read_segmented(first), read_segmented(tmp_path / "c.mcap")
+    a, c = read_segmented(tmp_path / "a.mcap"), read_segmented(tmp_path / "c.mcap")
     assert np.array_equal(a.vectors, c.vectors) and np.array_equal(a.bac, c.bac) and a.segments == c.segments
 
 

@@ -70,12 +70,14 @@ class PaperOptions:
 
 @dataclass(frozen=True)
 class ExperimentEvent:
-    """Progress: ``done`` of ``total`` cells, the one that just finished; ``results`` on the last event."""
+    """Progress: ``done`` of ``total`` cells, the one that just finished, how many are running;
+    ``results`` on the last event."""
 
     done: int
     total: int
     label: str
     results: PaperResults | None = None
+    running: int = 0
 
 
 def _learn_cells(opts: PaperOptions) -> list[LearnCell]:
@@ -247,7 +249,7 @@ def run_experiments(opts: PaperOptions, *, executor: Executor | None = None) -> 
         if ev.error is not None:
             raise LfdError(f"report: {ev.label}: {ev.error}")
         if ev.index >= 0:
-            yield ExperimentEvent(ev.finished, total, ev.label)
+            yield ExperimentEvent(ev.finished, total, ev.label, running=ev.running)
     learned: dict[str, Learned] = {}
     runs: dict[str, list[PaperRun]] = {}
     for cell, value in zip(plan.cells, batch.result(), strict=True):

@@ -1,0 +1,58 @@
+"""Compiled kernels: a signal that arrives while numba compiles acts once the kernel is ready."""
+
+from __future__ import annotations
+
+import os
+import signal
+from typing import Any
+
+import numpy as np
+import pytest
+
+from lfdfuse import jit
+
+
+def _sum(x: np.ndarray) -> float:
+    total = 0.0
+    for v in x:
+        total += v
+    return total
+
+
+def test_an_interrupt_during_compilation_is_raised_after_it() -> None:
+    """Ctrl-C while a kernel compiles: the kernel finishes, then KeyboardInterrupt reaches the caller."""
+    k = jit.Kernel(_sum)
+    inside: list[bool] = []
+    with pytest.raises(KeyboardInterrupt):
+        with jit._signals_held():
+            os.kill(os.getpid(), signal.SIGINT)
+            inside.append(True)  # not interrupted here
+            if k.ready():
+                assert k(np.arange(4.0)) == 6.0
+            inside.append(True)
+    assert inside == [True, True]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_a_held_sigterm_reaches_the_commands_own_handler() -> None:
+    seen: list[int] = []
+
+    def handler(signum: int, frame: Any) -> None:
+        seen.append(signum)
+
+    before = signal.signal(signal.SIGTERM, handler)
+    try:
+        with jit._signals_held():
+            os.kill(os.getpid(), signal.SIGTERM)
+            assert seen == []
+        assert seen == [signal.SIGTERM]
+        assert signal.getsignal(signal.SIGTERM) is handler
+    finally:
+        signal.signal(signal.SIGTERM, before)
+
+
+def test_nothing_held_runs_as_before() -> None:
+    before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    with jit._signals_held():
+        pass
+    assert {s: signal.getsignal(s) for s in before} == before
