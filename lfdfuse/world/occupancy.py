@@ -25,6 +25,7 @@ import numpy as np
 import shapely
 import yaml
 from PIL import Image
+from scipy import ndimage
 from skimage import measure
 
 from lfdfuse.errors import WorldError
@@ -158,16 +159,12 @@ def free_cells(shades: np.ndarray, info: MapInfo) -> np.ndarray:
 
 def _clearance_px(free: np.ndarray) -> np.ndarray:
     """Distance (cells) from each free cell centre to the nearest non-free cell edge (0 if not free)."""
-    from scipy import ndimage  # only a map image needs it: built-in worlds start without scipy
-
     padded = np.pad(free, 1, constant_values=False)
     return np.asarray(np.maximum(ndimage.distance_transform_edt(padded)[1:-1, 1:-1] - 0.5, 0.0))
 
 
 def fill_pockets(free: np.ndarray, *, radius_px: float) -> np.ndarray:
     """``free`` without the 4-connected free regions where no cell has ``radius_px`` of clearance."""
-    from scipy import ndimage  # only a map image needs it: built-in worlds start without scipy
-
     labels, n = ndimage.label(free)
     if n == 0:
         return free
@@ -201,8 +198,6 @@ def default_start(free: np.ndarray, *, radius_px: float) -> tuple[int, int, floa
     The heading (rad, in the image frame: 0 = +col, π/2 = −row) is the longest line of sight
     among 36 directions. Raises :class:`WorldError` when the robot fits nowhere.
     """
-    from scipy import ndimage  # only a map image needs it: built-in worlds start without scipy
-
     clear = _clearance_px(free)
     room = clear > radius_px
     labels, n = ndimage.label(room)
