@@ -6,6 +6,10 @@ loop for numba. :func:`kernel` wraps the loop; nothing is imported or compiled u
 cached on disk (numba's ``cache=True``: beside the module, or in the user's cache folder when
 that is not writable), so only the first run after an install compiles.
 
+A compiled loop cannot call a plain Python function: a helper it calls is named in ``calls``
+(``kernel(loop, calls=[helper])``), compiled with it, and the loop sees the compiled helper under
+the helper's own name (the module keeps the plain function).
+
 ``LFDFUSE_KERNELS=numpy`` runs every reference instead (the tests compare the two; the
 benchmarks time both in one run). When numba is missing or a kernel fails to compile, the
 reference runs and one warning says so.
@@ -23,8 +27,9 @@ from __future__ import annotations
 import os
 import signal
 import threading
+import types
 import warnings
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
@@ -100,9 +105,16 @@ def _import_numba() -> Any:
 class Kernel:
     """A loop compiled by numba on first use, or None of it when it cannot be (see :meth:`ready`)."""
 
-    def __init__(self, fn: Callable[..., Any], *, signature: str | None = None) -> None:
+    def __init__(
+        self,
+        fn: Callable[..., Any],
+        *,
+        signature: str | None = None,
+        calls: Sequence[Callable[..., Any]] = (),
+    ) -> None:
         self.fn = fn
         self.signature = signature
+        self.calls = tuple(calls)
         self._compiled: Callable[..., Any] | None = None
         self._failed = False
         self._warm = False  # called once: compiled for its argument types, or loaded from the cache
@@ -123,8 +135,12 @@ class Kernel:
             self._failed = True
             return False
         try:
-            jit = numba.njit(cache=True, nogil=True, fastmath=False, error_model="numpy")
-            self._compiled = jit(self.signature)(self.fn) if self.signature else jit(self.fn)
+            opts: dict[str, Any] = {"cache": True, "nogil": True, "fastmath": False, "error_model": "numpy"}
+            fn = _with_compiled(self.fn, self.calls, numba.njit(**opts))
+            # with a signature numba compiles now (a typing error shows here); without, at the first call
+            self._compiled = (
+                numba.njit(self.signature, **opts)(fn) if self.signature else numba.njit(**opts)(fn)
+            )
         except Exception as exc:  # a typing error on this platform's numba: the reference still runs
             self._failed = True
             name = getattr(self.fn, "__name__", "kernel")
@@ -148,8 +164,35 @@ class Kernel:
         return result
 
 
-def kernel(fn: Callable[..., Any] | None = None, *, signature: str | None = None) -> Any:
-    """Decorate a numba-compatible loop as a lazily compiled :class:`Kernel`."""
+def _with_compiled(
+    fn: Callable[..., Any], calls: tuple[Callable[..., Any], ...], jit: Any
+) -> Callable[..., Any]:
+    """``fn`` reading each helper of ``calls`` (by its name) as compiled by ``jit``: the same code
+    over a copy of its module's globals, so the module's own name still holds the plain helper."""
+    if not calls:
+        return fn
+    code = getattr(fn, "__code__", None)
+    if code is None:
+        raise TypeError(f"{fn!r} is not a plain function: it cannot call compiled helpers")
+    names = {h.__name__: jit(h) for h in calls}
+    missing = sorted(set(names) - set(code.co_names))
+    if missing:
+        raise TypeError(f"{fn.__name__} calls no {', '.join(missing)}")
+    copy = types.FunctionType(code, {**fn.__globals__, **names}, fn.__name__, fn.__defaults__, fn.__closure__)
+    copy.__qualname__ = fn.__qualname__
+    copy.__module__ = fn.__module__
+    copy.__doc__ = fn.__doc__
+    return copy
+
+
+def kernel(
+    fn: Callable[..., Any] | None = None,
+    *,
+    signature: str | None = None,
+    calls: Sequence[Callable[..., Any]] = (),
+) -> Any:
+    """Decorate a numba-compatible loop as a lazily compiled :class:`Kernel` (``calls``: the
+    plain helpers it calls, compiled with it)."""
     if fn is None:
-        return lambda f: Kernel(f, signature=signature)
-    return Kernel(fn, signature=signature)
+        return lambda f: Kernel(f, signature=signature, calls=calls)
+    return Kernel(fn, signature=signature, calls=calls)

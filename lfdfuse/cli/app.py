@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import ast
+import importlib
 import inspect
 import re
+from collections.abc import Iterator, MutableMapping
 from pathlib import Path
 from typing import Any
 
 import typer
+import typer.main
 from typer.core import TyperArgument, TyperCommand, TyperGroup
 
 from lfdfuse import __version__
@@ -38,11 +42,118 @@ def _tidy(params: list[Any]) -> list[Any]:  # typer's parameter classes are a ve
     return params
 
 
+#: every command, in the order ``--help`` lists them, and the module of this package that holds it;
+#: a module is imported only when its command runs (or shows its own help), so starting one
+#: command never pays for the others' imports
+COMMANDS = {
+    "drive": "drive",
+    "estimate": "estimate",
+    "evaluate": "evaluate",
+    "execute": "execute",
+    "import": "import_cmd",
+    "inspect": "inspect",
+    "plot": "plot",
+    "report": "report",
+    "segment": "segment",
+    "simulate": "simulate",
+    "teleop": "teleop",
+    "worlds": "worlds",
+}
+
+
+def _summary(name: str) -> str:
+    """A command's help read from its module's source, without importing the module: the
+    docstring of the function registered as ``name`` (what :func:`finish` makes its help)."""
+    path = Path(__file__).with_name(f"{COMMANDS[name]}.py")
+    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        if not isinstance(node, ast.FunctionDef):
+            continue
+        for dec in node.decorator_list:
+            call = dec if isinstance(dec, ast.Call) else None
+            target = call.func if call is not None else dec
+            if not (isinstance(target, ast.Attribute) and target.attr == "command"):
+                continue
+            given = call.args[0] if call is not None and call.args else None
+            registered = given.value if isinstance(given, ast.Constant) else node.name.replace("_", "-")
+            if registered == name:
+                return help_text(ast.get_docstring(node, clean=False) or "")
+    raise LookupError(f"lfdfuse.cli.{COMMANDS[name]} registers no command {name!r}")
+
+
+class _Commands(MutableMapping[str, Any]):
+    """The root's commands by name: every name in :data:`COMMANDS` is listed from the start; a
+    command is built (its module imported and registered on :data:`app`) when first looked up."""
+
+    def __init__(self, built: MutableMapping[str, Any]) -> None:
+        self._built = dict(built)
+
+    def __getitem__(self, name: str) -> Any:
+        if name not in self._built:
+            if name not in COMMANDS:
+                raise KeyError(name)
+            importlib.import_module(f"lfdfuse.cli.{COMMANDS[name]}")
+            finish(app)
+            info = next(i for i in app.registered_commands if _registered_name(i) == name)
+            self._built[name] = typer.main.get_command_from_info(
+                info,
+                pretty_exceptions_short=app.pretty_exceptions_short,
+                rich_markup_mode=app.rich_markup_mode,
+            )
+        return self._built[name]
+
+    def __setitem__(self, name: str, cmd: Any) -> None:
+        self._built[name] = cmd
+
+    def __delitem__(self, name: str) -> None:
+        del self._built[name]
+
+    def __iter__(self) -> Iterator[str]:
+        yield from COMMANDS
+        yield from (n for n in self._built if n not in COMMANDS)
+
+    def __len__(self) -> int:
+        return len(COMMANDS) + sum(n not in COMMANDS for n in self._built)
+
+    def __contains__(self, name: object) -> bool:
+        return name in COMMANDS or name in self._built
+
+    def listed(self, name: str) -> Any:
+        """The command as the root's help lists it: the built one, or its name and help alone."""
+        if name in self._built:
+            return self._built[name]
+        return TyperCommand(name=name, help=_summary(name), rich_markup_mode=app.rich_markup_mode)
+
+
+def _registered_name(info: Any) -> str:
+    return str(info.name or info.callback.__name__.replace("_", "-"))
+
+
 class Group(TyperGroup):
-    """The root command, its options shown as the commands' are (:func:`_tidy`)."""
+    """The root command, its options shown as the commands' are (:func:`_tidy`), its commands
+    imported only when one is run (``lfdfuse --help`` lists them all from their sources)."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self.commands = _Commands(self.commands)
+        self._listing = False
 
     def get_params(self, ctx: Any) -> list[Any]:
         return _tidy(super().get_params(ctx))
+
+    def list_commands(self, ctx: Any) -> list[str]:
+        return list(self.commands)  # the names alone: typer's own reads every command
+
+    def get_command(self, ctx: Any, cmd_name: str) -> Any:
+        if self._listing and isinstance(self.commands, _Commands) and cmd_name in COMMANDS:
+            return self.commands.listed(cmd_name)
+        return super().get_command(ctx, cmd_name)
+
+    def format_help(self, ctx: Any, formatter: Any) -> None:
+        self._listing = True
+        try:
+            super().format_help(ctx, formatter)
+        finally:
+            self._listing = False
 
 
 app = typer.Typer(

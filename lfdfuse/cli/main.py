@@ -5,24 +5,8 @@ from __future__ import annotations
 import sys
 import warnings
 
-# every command module registers itself on the app when imported (one line each)
-from lfdfuse.cli import (
-    drive,  # noqa: F401
-    estimate,  # noqa: F401
-    evaluate,  # noqa: F401
-    execute,  # noqa: F401
-    import_cmd,  # noqa: F401
-    inspect,  # noqa: F401
-    plot,  # noqa: F401
-    report,  # noqa: F401
-    segment,  # noqa: F401
-    simulate,  # noqa: F401
-    teleop,  # noqa: F401
-    worlds,  # noqa: F401
-)
-from lfdfuse.cli.app import app, finish
-
-finish(app)  # every command's help from its docstring, readable at any width
+# each command's module is imported when that command runs (lfdfuse.cli.app.COMMANDS)
+from lfdfuse.cli.app import app
 
 __all__ = ["app", "main"]
 

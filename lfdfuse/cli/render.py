@@ -10,7 +10,6 @@ from rich.table import Table
 from lfdfuse.behaviors.names import abbreviation, legend_entry
 from lfdfuse.cli.common import console
 from lfdfuse.cli.tables import show
-from lfdfuse.estimate.methods import EstimateOptions, is_point_fit
 from lfdfuse.execute.report import help_line, verdict
 from lfdfuse.network.table import FusionRow, FusionTable, Network
 from lfdfuse.segment.goals import Segmentation, bac_summary
@@ -76,6 +75,8 @@ def print_provenance(table: FusionTable) -> None:
 
 def print_table(table: FusionTable) -> None:
     """Weights (± std), samples and fit error per step and BAC, in percent to fit a terminal."""
+    from lfdfuse.estimate.methods import EstimateOptions, is_point_fit  # the fit's stack: only here
+
     legend = ", ".join(legend_entry(b) for b in table.behaviors)
     by = table.estimated_by
     # a least-squares fit has no uncertainty: its std is 0 by construction unless bootstrapped

@@ -5,7 +5,8 @@ from inside it, sorted by a lower bound of their distance from anywhere in the c
 loops walk that list nearest first and stop as soon as the answer is no farther than the next
 segment's bound: a beam that hits a wall 1 m away looks at the walls within about 1 m only.
 
-Each (beam, segment) pair is solved with the same float64 operations, in the same order, as
+Each (beam, segment) pair is solved by one helper, :func:`_solve` (compiled with each loop that
+calls it), with the same float64 operations, in the same order, as
 :func:`~lfdfuse.world.segments.intersect` (the parallel and collinear cases included), and a
 minimum does not depend on the order it is taken in, so the results equal the numpy
 reference's (a range of zero is +0.0 in both). The beam directions come in precomputed (numpy's ``cos``/``sin``), so no
@@ -21,6 +22,29 @@ import math
 import numpy as np
 
 from lfdfuse.jit import kernel
+
+
+def _solve(wx: float, wy: float, ex: float, ey: float, ux: float, uy: float) -> float:
+    """The range along the unit ray ``(ux, uy)`` to the segment from ``(wx, wy)`` (relative to
+    the ray's origin) along ``(ex, ey)``, or −1.0 when the ray misses it: the solve of
+    :func:`~lfdfuse.world.segments.intersect`, operation for operation."""
+    denom = ux * ey - uy * ex
+    if abs(denom) <= 1e-12:
+        # parallel: a beam along a wall hits the nearest point ahead of it
+        if abs(wx * uy - wy * ux) > 1e-9:
+            return -1.0
+        ta = wx * ux + wy * uy
+        tb = (wx + ex) * ux + (wy + ey) * uy
+        if (ta <= 0.0 and tb >= 0.0) or (tb <= 0.0 and ta >= 0.0):
+            return 0.0
+        t = min(ta, tb)
+        return t if t >= 0.0 else -1.0
+    inv = 1.0 / denom
+    t = (wx * ey - wy * ex) * inv
+    u = (wx * uy - wy * ux) * inv
+    if not (t >= 0.0 and u >= -1e-12 and u <= 1.0 + 1e-12):
+        return -1.0
+    return t
 
 
 def _cast_loop(
@@ -51,26 +75,9 @@ def _cast_loop(
             wy = ay - y
             ex = seg[s, 2] - ax
             ey = seg[s, 3] - ay
-            # the solve of `intersect`, operation for operation (numba cannot call a plain helper)
-            denom = ux * ey - uy * ex
-            if abs(denom) <= 1e-12:
-                # parallel: a beam along a wall hits the nearest point ahead of it
-                if abs(wx * uy - wy * ux) > 1e-9:
-                    continue
-                ta = wx * ux + wy * uy
-                tb = (wx + ex) * ux + (wy + ey) * uy
-                if (ta <= 0.0 and tb >= 0.0) or (tb <= 0.0 and ta >= 0.0):
-                    t = 0.0
-                else:
-                    t = min(ta, tb)
-                    if t < 0.0:
-                        continue
-            else:
-                inv = 1.0 / denom
-                t = (wx * ey - wy * ex) * inv
-                u = (wx * uy - wy * ux) * inv
-                if not (t >= 0.0 and u >= -1e-12 and u <= 1.0 + 1e-12):
-                    continue
+            t = _solve(wx, wy, ex, ey, ux, uy)
+            if t < 0.0:
+                continue
             if t < best:
                 best = t
         out[b] = best + 0.0  # +0.0 for a range of zero, as the reference
@@ -115,34 +122,17 @@ def _blocked_loop(
         wy = ay - y
         ex = seg[s, 2] - ax
         ey = seg[s, 3] - ay
-        # the solve of `intersect`, operation for operation (numba cannot call a plain helper)
-        denom = ux * ey - uy * ex
-        if abs(denom) <= 1e-12:
-            # parallel: a beam along a wall hits the nearest point ahead of it
-            if abs(wx * uy - wy * ux) > 1e-9:
-                continue
-            ta = wx * ux + wy * uy
-            tb = (wx + ex) * ux + (wy + ey) * uy
-            if (ta <= 0.0 and tb >= 0.0) or (tb <= 0.0 and ta >= 0.0):
-                t = 0.0
-            else:
-                t = min(ta, tb)
-                if t < 0.0:
-                    continue
-        else:
-            inv = 1.0 / denom
-            t = (wx * ey - wy * ex) * inv
-            u = (wx * uy - wy * ux) * inv
-            if not (t >= 0.0 and u >= -1e-12 and u <= 1.0 + 1e-12):
-                continue
+        t = _solve(wx, wy, ex, ey, ux, uy)
+        if t < 0.0:
+            continue
         if t < dist:
             return True
     return False
 
 
-cast_loop = kernel(_cast_loop)
+cast_loop = kernel(_cast_loop, calls=[_solve])
 clearance_loop = kernel(_clearance_loop)
-blocked_loop = kernel(_blocked_loop)
+blocked_loop = kernel(_blocked_loop, calls=[_solve])
 
 
 def _sector_lists(bins: np.ndarray, sectors: int, starts: np.ndarray) -> np.ndarray:
@@ -202,33 +192,16 @@ def _cast_sectors_loop(
             wy = cand[k, 1] - y
             ex = cand[k, 2]
             ey = cand[k, 3]
-            # the solve of `intersect`, operation for operation (numba cannot call a plain helper)
-            denom = ux * ey - uy * ex
-            if abs(denom) <= 1e-12:
-                # parallel: a beam along a wall hits the nearest point ahead of it
-                if abs(wx * uy - wy * ux) > 1e-9:
-                    continue
-                ta = wx * ux + wy * uy
-                tb = (wx + ex) * ux + (wy + ey) * uy
-                if (ta <= 0.0 and tb >= 0.0) or (tb <= 0.0 and ta >= 0.0):
-                    t = 0.0
-                else:
-                    t = min(ta, tb)
-                    if t < 0.0:
-                        continue
-            else:
-                inv = 1.0 / denom
-                t = (wx * ey - wy * ex) * inv
-                u = (wx * uy - wy * ux) * inv
-                if not (t >= 0.0 and u >= -1e-12 and u <= 1.0 + 1e-12):
-                    continue
+            t = _solve(wx, wy, ex, ey, ux, uy)
+            if t < 0.0:
+                continue
             if t < best:
                 best = t
         out[b] = best + 0.0  # +0.0 for a range of zero, as the reference
 
 
 sector_lists = kernel(_sector_lists)
-cast_sectors_loop = kernel(_cast_sectors_loop)
+cast_sectors_loop = kernel(_cast_sectors_loop, calls=[_solve])
 
 
 def _near_pairs_loop(

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ast
 import os
 import shutil
 import subprocess
@@ -10,9 +11,12 @@ from pathlib import Path
 
 import pytest
 import typer
+import typer.rich_utils
 from typer.testing import CliRunner
 
+from lfdfuse.cli.app import COMMANDS
 from lfdfuse.cli.main import app
+from tests.conftest import ROOT
 
 runner = CliRunner()
 
@@ -27,6 +31,53 @@ def test_every_command_has_help_with_an_example() -> None:
         res = runner.invoke(app, [name, "--help"])
         assert res.exit_code == 0, name
         assert "Example" in res.output, f"{name} --help has no example"
+
+
+_IMPORTED = """
+import sys
+import typer.rich_utils
+from typer.testing import CliRunner
+from lfdfuse.cli.main import app
+typer.rich_utils.MAX_WIDTH = 100
+res = CliRunner().invoke(app, sys.argv[1:])
+assert res.exit_code == 0, res.output
+print(res.output)
+print(sorted(m for m in sys.modules if m.startswith("lfdfuse.")))
+"""
+
+
+def _run_reporting_imports(*args: str) -> tuple[str, list[str]]:
+    res = subprocess.run(
+        [sys.executable, "-c", _IMPORTED, *args], capture_output=True, text=True, timeout=600, cwd=ROOT
+    )
+    assert res.returncode == 0, res.stderr
+    *out, modules = res.stdout.rstrip("\n").split("\n")
+    return "\n".join(out), list(ast.literal_eval(modules))
+
+
+def test_help_lists_every_command_without_importing_any() -> None:
+    """`lfdfuse --help` reads each command's help from its source: no command module is imported
+    (starting one command costs only its own imports), and the list is the one the commands give."""
+    out, modules = _run_reporting_imports("--help")
+    assert [m for m in modules if m.startswith("lfdfuse.cli.") and m.split(".")[2] in COMMANDS.values()] == []
+    assert not any(m.startswith(("lfdfuse.sim", "lfdfuse.estimate", "lfdfuse.world")) for m in modules), (
+        modules
+    )
+    # the same list as with every command imported and built (in-process, all loaded by now)
+    group = typer.main.get_group(app)
+    built = {name: group.commands[name] for name in COMMANDS}
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(typer.rich_utils, "MAX_WIDTH", 100)
+        full = runner.invoke(app, ["--help"])
+    assert full.exit_code == 0 and out.strip() == full.output.strip()
+    for name, cmd in built.items():
+        assert name in out and cmd.help and cmd.help.split("\n\n")[0].split()[0] in out
+
+
+def test_one_command_imports_only_its_own_module(tmp_path: Path) -> None:
+    _, modules = _run_reporting_imports("worlds")
+    commands = {m.split(".")[2] for m in modules if m.startswith("lfdfuse.cli.")} & set(COMMANDS.values())
+    assert commands == {"worlds"}
 
 
 def test_worlds_lists_builtins() -> None:

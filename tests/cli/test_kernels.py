@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from tests.conftest import ROOT
 
 # runs the CLI in-process, then reports whether numba was imported
@@ -59,16 +61,27 @@ def _simulate(tmp: Path, name: str, env: dict[str, str], code: str = "") -> tupl
     return out.read_bytes(), res.stderr
 
 
-def test_compiled_and_numpy_kernels_write_the_same_bytes(tmp_path: Path) -> None:
+@pytest.fixture(scope="module")
+def reference_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[bytes, str]:
+    """The run with the numpy references asked for (``LFDFUSE_KERNELS=numpy``), once for the
+    tests below that compare against it."""
+    return _simulate(tmp_path_factory.mktemp("numpy"), "numpy", {"LFDFUSE_KERNELS": "numpy"})
+
+
+def test_compiled_and_numpy_kernels_write_the_same_bytes(
+    tmp_path: Path, reference_run: tuple[bytes, str]
+) -> None:
     compiled, err = _simulate(tmp_path, "numba", {})
     assert "warning" not in err, err
-    reference, err = _simulate(tmp_path, "numpy", {"LFDFUSE_KERNELS": "numpy"})
+    reference, err = reference_run
     assert "warning" not in err, err  # the references asked for: nothing to warn about
     assert compiled == reference
 
 
-def test_without_numba_one_warning_line_and_the_same_bytes(tmp_path: Path) -> None:
-    reference, _ = _simulate(tmp_path, "numpy", {"LFDFUSE_KERNELS": "numpy"})
+def test_without_numba_one_warning_line_and_the_same_bytes(
+    tmp_path: Path, reference_run: tuple[bytes, str]
+) -> None:
+    reference, _ = reference_run
     # numba cannot be imported (as on a platform without llvmlite)
     got, err = _simulate(tmp_path, "none", {}, "import sys; sys.modules['numba'] = None")
     lines = [ln for ln in err.splitlines() if ln.startswith("warning:")]

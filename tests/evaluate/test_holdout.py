@@ -16,7 +16,6 @@ from lfdfuse.cli.main import app
 from lfdfuse.errors import ConfigError
 from lfdfuse.evaluate.holdout import METHODS, evaluate, slice_run
 from lfdfuse.segment.goals import GoalSegment
-from lfdfuse.segment.pipeline import segment_file
 from lfdfuse.segment.read import SegmentedRun
 
 NAMES = ("avoid", "wander", "wall_attract_left", "wall_attract_right")
@@ -96,9 +95,8 @@ def test_bad_holdout_is_a_clear_error(holdout: float) -> None:
         evaluate(synthetic(100, 0), holdout=holdout)
 
 
-def test_cli_writes_the_design_json(tmp_path: Path, sample_dir: Path) -> None:
-    seg = tmp_path / "d.seg.mcap"
-    segment_file(sample_dir / "keep-left-building.mcap", out=seg)
+def test_cli_writes_the_design_json(tmp_path: Path, keep_left_segmented: Path) -> None:
+    seg = keep_left_segmented
     out = tmp_path / "eval.json"
     res = CliRunner().invoke(app, ["evaluate", str(seg), "--holdout", "0.3", "--json", str(out)])
     assert res.exit_code == 0, res.output

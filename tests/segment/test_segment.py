@@ -105,7 +105,9 @@ def test_segment_outputs_partition_every_step() -> None:
             assert (out.bac[st:en] == b).all()
 
 
-def test_segmenting_is_deterministic_and_idempotent(tmp_path: Path, sample_dir: Path) -> None:
+def test_segmenting_is_deterministic_and_idempotent(
+    tmp_path: Path, sample_dir: Path, keep_left_segmented: Path
+) -> None:
     src = sample_dir / "keep-left-building.mcap"
     told: list[float] = []
     segment_file(src, out=tmp_path / "a.mcap", progress=lambda done, total: told.append(done / total))
@@ -113,8 +115,8 @@ def test_segmenting_is_deterministic_and_idempotent(tmp_path: Path, sample_dir: 
     assert told == sorted(told) and told[-1] == 1.0
     assert len({round(f, 2) for f in told if 0.0 < f < 0.25}) >= 3  # while reading
     assert len({round(f, 2) for f in told if 0.34 < f < 1.0}) >= 3  # while writing
-    segment_file(src, out=tmp_path / "b.mcap")
-    assert (tmp_path / "a.mcap").read_bytes() == (tmp_path / "b.mcap").read_bytes()
+    # the session's segmentation of src (default options, another run): the same bytes
+    assert (tmp_path / "a.mcap").read_bytes() == keep_left_segmented.read_bytes()
     segment_file(tmp_path / "a.mcap", out=tmp_path / "c.mcap")  # a segmented file again
     topics = [t for t, *_ in iter_messages(tmp_path / "c.mcap")]
     assert topics.count("/lfd/bac") == topics.count("/scan")  # replaced, not duplicated
@@ -122,12 +124,12 @@ def test_segmenting_is_deterministic_and_idempotent(tmp_path: Path, sample_dir: 
     assert np.array_equal(a.vectors, c.vectors) and np.array_equal(a.bac, c.bac) and a.segments == c.segments
 
 
-def test_three_goal_sample_has_three_goal_segments_in_order(tmp_path: Path, sample_dir: Path) -> None:
-    res = segment_file(sample_dir / "three-goals-building.mcap", out=tmp_path / "s.mcap")
-    goals = [s.goal for s in res.segmentation.segments]
+def test_three_goal_sample_has_three_goal_segments_in_order(three_goal_segmented: Path) -> None:
+    # the sample segmented with the defaults (the session's), its segments read back from the file
+    goals = [s.goal for s in read_segmented(three_goal_segmented).segments]
     assert goals[:3] == ["attract_red", "attract_green", "attract_blue"]
     assert all(g is None for g in goals[3:]) and len(goals) <= 4
-    report = mcap_check(tmp_path / "s.mcap")
+    report = mcap_check(three_goal_segmented)
     assert '"ok": true' in report
 
 

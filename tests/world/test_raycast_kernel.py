@@ -216,3 +216,30 @@ def test_a_shared_caster_is_built_once_per_map() -> None:
     assert (
         rc.cast(3.0, 3.0, beams).tobytes() == RayCaster(seg, max_range_m=8.0).cast(3.0, 3.0, beams).tobytes()
     )
+
+
+def _twice(x: float) -> float:
+    return 2.0 * x
+
+
+def _twice_plus_one(x: float) -> float:
+    return _twice(x) + 1.0
+
+
+def _twice_plus_two(x: float) -> float:
+    return _twice(x) + 2.0
+
+
+def test_a_helper_is_compiled_with_the_loops_that_call_it() -> None:
+    """One solve serves every loop: ``kernel(loop, calls=[helper])`` compiles the helper with the
+    loop; without it a loop calling a plain function does not compile (its reference runs)."""
+    eager = "float64(float64)"  # compiled in ready(), as the loops are on their first call
+    with_helper = jit.Kernel(_twice_plus_one, signature=eager, calls=[_twice])
+    assert with_helper.ready() and with_helper(3.0) == 7.0
+    assert _twice(3.0) == 6.0 and not hasattr(_twice, "py_func")  # the module keeps the plain helper
+    with pytest.warns(RuntimeWarning, match="kernel _twice_plus_two did not compile"):
+        assert not jit.Kernel(_twice_plus_two, signature=eager).ready()
+    with pytest.warns(RuntimeWarning, match="calls no _twice"):  # a helper the loop does not call
+        assert not jit.Kernel(_twice, calls=[_twice]).ready()
+    for loop in (raycast_kernel.cast_loop, raycast_kernel.cast_sectors_loop, raycast_kernel.blocked_loop):
+        assert loop.calls == (raycast_kernel._solve,)
