@@ -307,6 +307,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("estimate",),
     ("execute",),
     ("drive", "learn"),
+    ("record",),  # a live robot (drive's transports) written as import writes a demo
     ("evaluate",),
     ("viz",),
     ("cli",),

@@ -14,6 +14,7 @@ from lfdfuse.cli import (
     import_cmd,  # noqa: F401
     inspect,  # noqa: F401
     plot,  # noqa: F401
+    record,  # noqa: F401
     report,  # noqa: F401
     segment,  # noqa: F401
     simulate,  # noqa: F401
