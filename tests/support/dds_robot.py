@@ -6,14 +6,16 @@ as a participant named ``lfdfuse_test_robot`` and publishes what a ROS 2 robot p
 the robot's left), ``rt/odom`` (``nav_msgs/Odometry``, best effort), ``rt/tf`` (reliable) and
 ``rt/tf_static`` (reliable, transient local: published once, latched); it drives by the
 ``geometry_msgs/Twist`` (``--cmd-stamped``: ``TwistStamped``) it reads on ``rt/cmd_vel``
-(reliable). Stamps are the epoch time at the start plus the simulated time.
+(reliable). Stamps are the epoch time at the start plus the simulated time (``--lockstep``: plus
+the wall time since the start, the robot's clock, as its steps are not 0.1 s apart).
 
 Pacing: ``--lockstep`` steps as soon as a command answers a scan (a minute of robot time in
 seconds, the same closed loop); else the robot runs at ``--speed`` × real time. ``--person STYLE``
 adds a scripted person driving it with their own teleop: another participant
 (``teleop_twist_keyboard``) that publishes the style teacher's Twist on ``rt/cmd_vel`` each tick.
-Faults: ``--pause-at T --pause-for S`` (scans stop), ``--malformed-at T`` (three samples on
-``rt/scan`` that are not a LaserScan). One JSON line on stdout when it is listening
+Faults: ``--pause-at T --pause-for S`` (scans stop), ``--malformed-at T`` (samples on ``rt/scan``
+that are no LaserScan: see :meth:`Robot.malformed`). On exit the participants are deleted, so
+their peers see them leave at once (as a ROS 2 node that shuts down). One JSON line on stdout when it is listening
 (``{"ready": true}``); on exit (its duration, SIGTERM) ``--out`` gets the poses, the commands
 received (monotonic wall time, tick, v, ω), collisions and the fault marks.
 
@@ -23,7 +25,6 @@ Not part of the pipeline: a test rig (``tests/drive``, the ``drive`` benchmark).
 import argparse
 import json
 import math
-import queue
 import signal
 import sys
 import threading
@@ -33,7 +34,16 @@ from typing import Any
 
 import numpy as np
 from cyclonedds._clayer import ddspy_write
-from cyclonedds.core import Listener, Policy, Qos
+from cyclonedds.core import (
+    InstanceState,
+    Listener,
+    Policy,
+    Qos,
+    ReadCondition,
+    SampleState,
+    ViewState,
+    WaitSet,
+)
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
@@ -101,15 +111,18 @@ class Robot:
         self.w_tf = DataWriter(self.dp, Topic(self.dp, "rt/tf", idl.TFMessage), qos=RELIABLE)
         self.w_static = DataWriter(self.dp, Topic(self.dp, "rt/tf_static", idl.TFMessage), qos=LATCHED)
         cmd_type = idl.TwistStamped if args.cmd_stamped else idl.Twist
-        self.commands: queue.Queue[tuple[float, float, float]] = queue.Queue()
         self.matched = threading.Event()
-        listener = Listener(on_data_available=self._on_cmd)
+        # no data listener on the command reader: the person's writer lives in this process, and a
+        # Python listener on a locally written topic can deadlock the binding (see _take)
+        listener = Listener()
         listener.set_on_subscription_matched(
             lambda r, st: self.matched.set() if st.current_count > 0 else self.matched.clear()
         )
         self.r_cmd = DataReader(
             self.dp, Topic(self.dp, "rt/cmd_vel", cmd_type), qos=COMMAND, listener=listener
         )
+        self.waitset = WaitSet(self.dp)
+        self.waitset.attach(ReadCondition(self.r_cmd, SampleState.Any | ViewState.Any | InstanceState.Any))
         self.person: StyleTeacher | None = None
         if args.person:
             self.tp = DomainParticipant(args.domain, qos=_named("teleop_twist_keyboard"))
@@ -131,15 +144,14 @@ class Robot:
         self.marks: dict[str, float] = {}
         self.tick = 0
         self.t0_ns = time.time_ns() // 1_000_000_000 * 1_000_000_000
-
-    def _on_cmd(self, reader: DataReader[Any]) -> None:
-        now = time.monotonic()
-        for m in reader.take(N=64):
-            tw = m.twist if isinstance(m, idl.TwistStamped) else m
-            self.commands.put((now, float(tw.linear.x), float(tw.angular.z)))
+        self.t0_wall = time.monotonic()
 
     def publish(self, t_ns: int, pose: Pose, ranges: np.ndarray, *, scan: bool) -> None:
         stamp = self.t0_ns + t_ns
+        if (
+            self.args.lockstep
+        ):  # stamped by the robot's clock, as a real robot's are (its steps are not 0.1 s apart)
+            stamp = self.t0_ns + round((time.monotonic() - self.t0_wall) * 1e9)
         cov = [0.0] * 36
         odom = idl.Odometry(
             _header(stamp, "odom"),
@@ -167,19 +179,33 @@ class Robot:
             self.w_scan.write(msg)
             self.published.append(time.monotonic())
 
-    def malformed(self) -> None:
+    def malformed(self, stamp_ns: int) -> None:
+        """Three byte strings that are no CDR LaserScan (Cyclone DDS drops them on receipt: it
+        checks every sample against the type), then three well-formed LaserScans that are no scan
+        (no beams, a NaN increment)."""
         for _ in range(3):
             ddspy_write(self.w_scan._ref, b"\x00\x01\x00\x00\x07\x00\x00\x00 not a LaserScan")
+        for k in range(3):
+            bad = idl.LaserScan(
+                _header(stamp_ns + k, "laser"), 0.0, 0.0, math.nan, 0.0, 0.1, 0.05, 8.0, [], []
+            )
+            self.w_scan.write(bad)
 
     def _take(self, timeout_s: float) -> list[tuple[float, float, float]]:
-        got = []
-        try:
-            got.append(self.commands.get(timeout=max(timeout_s, 0.0)))
-            while True:
-                got.append(self.commands.get_nowait())
-        except queue.Empty:
-            pass
-        return got
+        """The commands that came, waiting up to ``timeout_s`` for the first (a wait set: the
+        wait releases the GIL, and no Python listener runs on a DDS thread)."""
+        end = time.monotonic() + max(timeout_s, 0.0)
+        while True:
+            got = []
+            for m in self.r_cmd.take(N=64):
+                if not isinstance(m, idl.Twist | idl.TwistStamped):
+                    continue  # a writer left (an invalid sample: no data)
+                tw = m.twist if isinstance(m, idl.TwistStamped) else m
+                got.append((time.monotonic(), float(tw.linear.x), float(tw.angular.z)))
+            left = end - time.monotonic()
+            if got or left <= 0:
+                return got
+            self.waitset.wait(round(min(left, 0.05) * 1e9))
 
     def run(self) -> None:
         a = self.args
@@ -206,7 +232,7 @@ class Robot:
             if not paused and "pause" in self.marks and "back" not in self.marks:
                 self.marks["back"] = time.monotonic()
             if a.malformed_at is not None and sim_s >= a.malformed_at and "bad" not in self.marks:
-                self.malformed()
+                self.malformed(self.t0_ns + obs.t_ns)
                 self.marks["bad"] = time.monotonic()
             self.poses.append(obs.pose.as_tuple())
             self.sides.append((float(obs.reading.ranges_m[i_left]), float(obs.reading.ranges_m[i_right])))
@@ -234,6 +260,12 @@ class Robot:
             if self.stop.is_set() or time.monotonic() > end:
                 return False
         return True
+
+    def close(self) -> None:
+        """Leave the domain now (peers see the participants go, rather than their lease expire)."""
+        for dp in (getattr(self, "tp", None), self.dp):
+            if dp is not None:
+                dp.__del__()
 
     def result(self) -> dict[str, Any]:
         return {
@@ -275,6 +307,7 @@ def main(argv: list[str] | None = None) -> None:
     finally:
         if args.out:
             Path(args.out).write_text(json.dumps(robot.result()))
+        robot.close()
 
 
 if __name__ == "__main__":

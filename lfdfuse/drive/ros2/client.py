@@ -30,7 +30,7 @@ from cyclonedds.builtin import (
     BuiltinTopicDcpsPublication,
     BuiltinTopicDcpsSubscription,
 )
-from cyclonedds.core import DDSException, Entity, Listener
+from cyclonedds.core import DDSException, Entity, InstanceState, Listener
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.idl import IdlStruct
 from cyclonedds.pub import DataWriter
@@ -47,6 +47,8 @@ from lfdfuse.robot.ros import frame_name
 
 #: how long a new link waits for the robot's command subscriber to be discovered beside its scan
 COMMAND_DISCOVERY_S = 0.3
+#: how long the command writer waits for the robot's subscriber it discovered to match
+COMMAND_MATCH_S = 1.5
 
 _READ: dict[Role, Callable[[Any], Record]] = {
     Role.SCAN: _cdr_scan,
@@ -91,7 +93,12 @@ class _Note:
     text: str
 
 
-_Item = _Data | _Matched | _Note
+@dataclass(frozen=True)
+class _TypeClash:
+    wanted: Wanted  # a publisher of this topic has another type
+
+
+_Item = _Data | _Matched | _Note | _TypeClash
 
 
 class Ros2Transport:
@@ -163,13 +170,8 @@ class Ros2Link:
 
         def incompatible(reader: DataReader[Any], status: Any) -> None:
             policy = int(status.last_policy_id)
-            if policy == names.TYPE_POLICY:  # another type: discovery names it (_publications)
-                self._put(
-                    _Note(
-                        f"type {w.topic}",
-                        f"{w.topic}: a publisher's type is not {idl.ros_type(w.type_name)}: not received",
-                    )
-                )
+            if policy == names.TYPE_POLICY:  # another type: said once discovery names it
+                self._put(_TypeClash(w))
                 return
             self._put(
                 _Note(
@@ -234,11 +236,20 @@ class Ros2Link:
             if isinstance(item, _Note):
                 self.warn(item.key, item.text)
                 continue
+            if isinstance(item, _TypeClash):
+                self._type_clash(item.wanted)
+                continue
             self.matched = item.count
             if item.count > 0 and not self.ready:
                 return await self._ready()
             if item.count == 0 and self.ready:
                 raise Lost(f"no publisher of {self.topics.scan} is left")
+
+    def _type_clash(self, w: Wanted) -> None:
+        self._publications()  # names the other type when discovery has it (one line per topic)
+        others = sorted(idl.ros_type(t) for t in self._seen_types.get(w.dds, ()) if t != w.type_name)
+        kind = f"published as {', '.join(others)}" if others else "published with another type"
+        self.warn(f"type {w.topic}", f"{w.topic} is {kind}, not {idl.ros_type(w.type_name)}: not received")
 
     async def _ready(self) -> Ready:
         self.ready = True
@@ -246,23 +257,38 @@ class Ros2Link:
             return Ready(camera=False, command="")
         dds = idl.dds_topic(self.topics.cmd)
         end = time.monotonic() + COMMAND_DISCOVERY_S
-        types = self._subscriber_types(dds)
-        while not types and time.monotonic() < end:
+        subs = self._subscribers(dds)
+        while not subs and time.monotonic() < end:
             await asyncio.sleep(0.02)
-            types = self._subscriber_types(dds)
-        self.command = names.command_struct(types)
+            subs = self._subscribers(dds)
+        self.command = names.command_struct(set(subs.values()))
         qos = names.COMMAND
         self.writer = DataWriter(self.dp, self._topic(dds, self.command), qos=qos)
         self._entities.append(self.writer)
+        # the robot's subscriber is matched before the first command (the new link's zero Twist):
+        # a volatile writer's sample reaches only the readers it has already matched
+        end = time.monotonic() + COMMAND_MATCH_S
+        while time.monotonic() < end:
+            matched = set(self.writer.get_matched_subscriptions())
+            if matched and all(
+                h in matched for h, t in self._subscribers(dds).items() if t == self.command.__idl_typename__
+            ):
+                break
+            await asyncio.sleep(0.01)
         return Ready(camera=False, command=f"cdr {idl.ros_type(self.command.__idl_typename__)}")
 
-    def _subscriber_types(self, dds: str) -> set[str]:
-        """Type names of the subscribers discovered on the DDS topic ``dds``."""
-        got: set[str] = set()
+    def _subscribers(self, dds: str) -> dict[int, str]:
+        """The live subscribers discovered on the DDS topic ``dds``: instance handle → type name."""
+        got: dict[int, str] = {}
         with contextlib.suppress(DDSException):
             for ep in self._subs.read(N=256):
-                if getattr(ep, "topic_name", None) == dds and str(ep.participant_key) != str(self.dp.guid):
-                    got.add(str(ep.type_name))
+                info = getattr(ep, "sample_info", None)
+                if (
+                    getattr(ep, "topic_name", None) == dds
+                    and str(ep.participant_key) != str(self.dp.guid)
+                    and (info is None or info.instance_state == InstanceState.Alive)
+                ):
+                    got[int(info.instance_handle) if info is not None else id(ep)] = str(ep.type_name)
         return got
 
     async def send(self, v_mps: float, omega_rps: float, stamp_ns: int) -> None:
