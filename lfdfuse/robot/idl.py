@@ -84,14 +84,14 @@ class Quaternion(IdlStruct, typename="geometry_msgs::msg::dds_::Quaternion_"):
 
 
 @dataclass
-class Pose(IdlStruct, typename="geometry_msgs::msg::dds_::Pose_"):
+class PoseMsg(IdlStruct, typename="geometry_msgs::msg::dds_::Pose_"):  # (Pose: the robot's own type)
     position: Point = field(default_factory=Point)
     orientation: Quaternion = field(default_factory=Quaternion)
 
 
 @dataclass
 class PoseWithCovariance(IdlStruct, typename="geometry_msgs::msg::dds_::PoseWithCovariance_"):
-    pose: Pose = field(default_factory=Pose)
+    pose: PoseMsg = field(default_factory=PoseMsg)
     covariance: array[float64, 36] = field(default_factory=lambda: [0.0] * 36)
 
 
@@ -163,7 +163,7 @@ TYPES: dict[str, type[IdlStruct]] = {
     "geometry_msgs/msg/Vector3": Vector3,
     "geometry_msgs/msg/Point": Point,
     "geometry_msgs/msg/Quaternion": Quaternion,
-    "geometry_msgs/msg/Pose": Pose,
+    "geometry_msgs/msg/Pose": PoseMsg,
     "geometry_msgs/msg/PoseWithCovariance": PoseWithCovariance,
     "geometry_msgs/msg/Twist": Twist,
     "geometry_msgs/msg/TwistStamped": TwistStamped,

@@ -47,7 +47,7 @@ def test_record_a_person_over_dds_and_learn_keep_left(tmp_path: Path, domain: in
         "--person",
         "keep-left",
         "--seconds",
-        "150",
+        "100",
         "--command-timeout",
         "0.2",
         "--wait-for-listener",
@@ -63,8 +63,8 @@ def test_record_a_person_over_dds_and_learn_keep_left(tmp_path: Path, domain: in
     finally:
         robot.stop()
     s = got["s"]
-    assert r["collisions"] == 0 and r["ticks"] == 1500
-    assert s.connections == 1 and s.received["cmd"] >= 1400 and s.received["scan"] >= 1400
+    assert r["collisions"] == 0 and r["ticks"] == 1000
+    assert s.connections == 1 and s.received["cmd"] >= 950 and s.received["scan"] >= 950
     # import's channels and provenance, teacher: human, and who drove
     report = json.loads(mcap_check(demo))
     assert report["ok"] and set(report["counts"]) == IMPORT_CHANNELS
@@ -78,10 +78,10 @@ def test_record_a_person_over_dds_and_learn_keep_left(tmp_path: Path, domain: in
     assert max(sent) > 0.3
     # segment takes it directly; the table learned keeps left in another building
     seg = tmp_path / "demo.seg.mcap"
-    segment_file(demo, out=seg, behaviors=STYLE)
+    segment_file(demo, out=seg, behaviors=STYLE, measure_lag=False)  # each command answers its scan
     table, _, _ = estimate_run(read_segmented(seg), opts=EstimateOptions(seed=1, method="nnls"), name="rec")
     res = run_table(
-        ExecuteOptions(world=load_world("tee"), table=table, max_time_s=60.0),
+        ExecuteOptions(world=load_world("tee"), table=table, max_time_s=45.0),
         out=tmp_path / "run.mcap",
         command="execute",
     )

@@ -60,7 +60,7 @@ def _odom() -> tuple[Any, idl.Odometry]:
     i = idl.Odometry(
         ih,
         "base_link",
-        idl.PoseWithCovariance(idl.Pose(idl.Point(1.5, -2.25, 0.0), iq), cov),
+        idl.PoseWithCovariance(idl.PoseMsg(idl.Point(1.5, -2.25, 0.0), iq), cov),
         idl.TwistWithCovariance(idl.Twist(idl.Vector3(0.3, 0.0, 0.0), idl.Vector3(0.0, 0.0, -0.4)), cov),
     )
     return r, i

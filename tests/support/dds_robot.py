@@ -156,7 +156,7 @@ class Robot:
         odom = idl.Odometry(
             _header(stamp, "odom"),
             "base_link",
-            idl.PoseWithCovariance(idl.Pose(idl.Point(pose.x, pose.y, 0.0), _quat(pose.theta)), cov),
+            idl.PoseWithCovariance(idl.PoseMsg(idl.Point(pose.x, pose.y, 0.0), _quat(pose.theta)), cov),
             idl.TwistWithCovariance(idl.Twist(), cov),
         )
         self.w_odom.write(odom)
