@@ -14,9 +14,17 @@ mapping (``/scan`` → ``rt/scan``). Only the DDS transport imports this module 
 
 # no `from __future__ import annotations`: cyclonedds reads the field types at run time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from cyclonedds.idl import IdlStruct
 from cyclonedds.idl.types import array, float32, float64, int32, sequence, uint32
+
+if TYPE_CHECKING:  # what the binding takes and gives for these fields
+    Floats = list[float]
+    Covariance = list[float]
+else:  # what the binding reads the wire format from (at run time)
+    Floats = sequence[float32]
+    Covariance = array[float64, 36]
 
 #: ROS 2's prefix of a topic's DDS name (``/scan`` → ``rt/scan``)
 TOPIC_PREFIX = "rt"
@@ -92,7 +100,7 @@ class PoseMsg(IdlStruct, typename="geometry_msgs::msg::dds_::Pose_"):  # (Pose: 
 @dataclass
 class PoseWithCovariance(IdlStruct, typename="geometry_msgs::msg::dds_::PoseWithCovariance_"):
     pose: PoseMsg = field(default_factory=PoseMsg)
-    covariance: array[float64, 36] = field(default_factory=lambda: [0.0] * 36)
+    covariance: Covariance = field(default_factory=lambda: [0.0] * 36)
 
 
 @dataclass
@@ -110,7 +118,7 @@ class TwistStamped(IdlStruct, typename="geometry_msgs::msg::dds_::TwistStamped_"
 @dataclass
 class TwistWithCovariance(IdlStruct, typename="geometry_msgs::msg::dds_::TwistWithCovariance_"):
     twist: Twist = field(default_factory=Twist)
-    covariance: array[float64, 36] = field(default_factory=lambda: [0.0] * 36)
+    covariance: Covariance = field(default_factory=lambda: [0.0] * 36)
 
 
 @dataclass
@@ -139,8 +147,8 @@ class LaserScan(IdlStruct, typename="sensor_msgs::msg::dds_::LaserScan_"):
     scan_time: float32 = 0.0
     range_min: float32 = 0.0
     range_max: float32 = 0.0
-    ranges: sequence[float32] = field(default_factory=list)
-    intensities: sequence[float32] = field(default_factory=list)
+    ranges: Floats = field(default_factory=list)
+    intensities: Floats = field(default_factory=list)
 
 
 @dataclass
@@ -151,9 +159,15 @@ class Odometry(IdlStruct, typename="nav_msgs::msg::dds_::Odometry_"):
     twist: TwistWithCovariance = field(default_factory=TwistWithCovariance)
 
 
+if TYPE_CHECKING:
+    Transforms = list[TransformStamped]
+else:
+    Transforms = sequence[TransformStamped]
+
+
 @dataclass
 class TFMessage(IdlStruct, typename="tf2_msgs::msg::dds_::TFMessage_"):
-    transforms: sequence[TransformStamped] = field(default_factory=list)
+    transforms: Transforms = field(default_factory=list)
 
 
 #: the structs by their ROS 2 message name

@@ -100,7 +100,7 @@ class Robot:
         self.sim = Simulator(self.world, np.random.default_rng(args.seed), self.sensors)
         self.dp = DomainParticipant(args.domain, qos=_named("lfdfuse_test_robot"))
         self.listened = threading.Event()  # a reader of the scan is matched
-        on_scan = Listener()
+        on_scan = Listener()  # type: ignore[no-untyped-call]
         on_scan.set_on_publication_matched(
             lambda w, st: self.listened.set() if st.current_count > 0 else self.listened.clear()
         )
@@ -114,7 +114,7 @@ class Robot:
         self.matched = threading.Event()
         # no data listener on the command reader: the person's writer lives in this process, and a
         # Python listener on a locally written topic can deadlock the binding (see _take)
-        listener = Listener()
+        listener = Listener()  # type: ignore[no-untyped-call]
         listener.set_on_subscription_matched(
             lambda r, st: self.matched.set() if st.current_count > 0 else self.matched.clear()
         )

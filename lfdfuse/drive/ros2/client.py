@@ -143,7 +143,7 @@ class Ros2Link:
         self._pubs = BuiltinDataReader(
             self.dp,
             BuiltinTopicDcpsPublication,
-            listener=Listener(on_data_available=lambda _: self._publications()),
+            listener=Listener(on_data_available=lambda _: self._publications()),  # type: ignore[no-untyped-call]
         )
         self._subs = BuiltinDataReader(self.dp, BuiltinTopicDcpsSubscription)
         self._parts = BuiltinDataReader(self.dp, BuiltinTopicDcpsParticipant)
@@ -181,7 +181,7 @@ class Ros2Link:
                 )
             )
 
-        listener = Listener(on_data_available=data, on_requested_incompatible_qos=incompatible)
+        listener = Listener(on_data_available=data, on_requested_incompatible_qos=incompatible)  # type: ignore[no-untyped-call]
         if w.role is Role.SCAN:
             listener.set_on_subscription_matched(
                 lambda reader, status: self._put(_Matched(int(status.current_count)))
