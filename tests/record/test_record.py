@@ -5,6 +5,7 @@ as ``import`` would, and a table learned from it keeps left in another building.
 from __future__ import annotations
 
 import json
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -89,3 +90,47 @@ def test_record_a_person_over_dds_and_learn_keep_left(tmp_path: Path, domain: in
     assert rep["collisions"] == 0 and rep["path_length_m"] >= 10.0
     assert rep["left_range_mean_m"] < 0.7 * rep["right_range_mean_m"], rep
     assert np.isfinite(rep["left_range_mean_m"])
+
+
+def test_record_through_a_foxglove_bridge(tmp_path: Path) -> None:
+    """``--connect ws://…``: the same recorder through the Foxglove transport (a bridge-like robot
+    that streams its own /cmd_vel, as foxglove_bridge does), the same demo."""
+    from rosbags.typesys import Stores, get_typestore
+
+    from lfdfuse.world.model import load_world
+    from tests.support.bridge_sim import BridgeSim
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    T = store.types
+    demo = tmp_path / "demo.mcap"
+    stopper = Stopper()
+    got: dict[str, RecordSummary] = {}
+    with BridgeSim(load_world("tee"), encoding="cdr", lockstep=False, cmd_stamped=True) as robot:
+        th = in_thread(lambda: got.update(s=record(RecordOptions(url=robot.url), out=demo, stopper=stopper)))
+        assert robot.wait_for_subscriber(publisher=False)
+
+        def teleop() -> None:  # the person's commands, as the bridge streams the robot's /cmd_vel
+            while not robot.stopped.is_set():
+                v3 = T["geometry_msgs/msg/Vector3"]
+                tw = T["geometry_msgs/msg/Twist"](v3(0.3, 0.0, 0.0), v3(0.0, 0.0, 0.2))
+                head = T["std_msgs/msg/Header"](T["builtin_interfaces/msg/Time"](0, 0), "base_link")
+                msg = T["geometry_msgs/msg/TwistStamped"](head, tw)
+                robot.channels["/cmd_vel"].log(
+                    bytes(store.serialize_cdr(msg, "geometry_msgs/msg/TwistStamped"))
+                )
+                time.sleep(0.1)
+
+        person = in_thread(teleop)
+        robot.run(3.0)
+        stopper.stop("done")
+        th.join(30)
+        robot.stopped.set()
+        person.join(5)
+    s = got["s"]
+    assert s.received["scan"] >= 20 and s.received["cmd"] >= 20
+    meta = file_info(demo).metadata["lfdfuse"]
+    assert meta["format"] == "foxglove" and meta["teacher"] == "human" and meta["command"] == "record"
+    assert meta["laser_mount_from"] == "tf (base_link → laser)"
+    sent = {json.loads(d)["linear"]["x"] for _, _, _, d in iter_messages(demo, topics=["/cmd_vel"])}
+    assert sent == {0.3}
+    assert set(json.loads(mcap_check(demo))["counts"]) == IMPORT_CHANNELS
