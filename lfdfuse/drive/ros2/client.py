@@ -10,7 +10,8 @@ decoding cost counts in the latency.
 
 The link is :class:`Ready` once a publisher of the scan is matched; outside ``--shadow`` it then
 creates the command writer, of the type the robot's ``--cmd`` subscriber has (``TwistStamped`` or
-``Twist``, from discovery). When the last scan publisher goes away (the robot's process ended)
+``Twist``, from discovery), once the robot's subscriber is matched (so the new link's zero Twist
+reaches it); scans that came while it got ready are dropped, as late. When the last scan publisher goes away (the robot's process ended)
 the link is :class:`Lost` and the run reconnects: a new participant, discovering afresh. A
 publisher of one of our topics with another type, or a QoS that cannot match, is one line.
 """
@@ -19,6 +20,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -129,6 +131,7 @@ class Ros2Link:
         self.closed = False
         self.ready = False
         self.matched = 0
+        self._ready_s = -math.inf  # when the link became ready (perf_counter)
         self.writer: DataWriter[Any] | None = None
         self.command: type[IdlStruct] = idl.Twist
         self.wanted = names.wanted(scan=topics.scan, odom=topics.odom, cmd=topics.cmd, listen_cmd=listen_cmd)
@@ -225,6 +228,8 @@ class Ros2Link:
         while True:
             item = await self.queue.get()
             if isinstance(item, _Data):
+                if item.wanted.role is Role.SCAN and item.arrived_s < self._ready_s:
+                    continue  # came while the link was getting ready: commanding from it would be late
                 cpu = time.thread_time()
                 try:
                     rec = _decode(item.wanted, item.payload)
@@ -254,6 +259,7 @@ class Ros2Link:
     async def _ready(self) -> Ready:
         self.ready = True
         if self.topics.shadow:
+            self._ready_s = time.perf_counter()
             return Ready(camera=False, command="")
         dds = idl.dds_topic(self.topics.cmd)
         end = time.monotonic() + COMMAND_DISCOVERY_S
@@ -268,13 +274,14 @@ class Ros2Link:
         # the robot's subscriber is matched before the first command (the new link's zero Twist):
         # a volatile writer's sample reaches only the readers it has already matched
         end = time.monotonic() + COMMAND_MATCH_S
-        while time.monotonic() < end:
+        while subs and time.monotonic() < end:
             matched = set(self.writer.get_matched_subscriptions())
             if matched and all(
                 h in matched for h, t in self._subscribers(dds).items() if t == self.command.__idl_typename__
             ):
                 break
             await asyncio.sleep(0.01)
+        self._ready_s = time.perf_counter()
         return Ready(camera=False, command=f"cdr {idl.ros_type(self.command.__idl_typename__)}")
 
     def _subscribers(self, dds: str) -> dict[int, str]:
