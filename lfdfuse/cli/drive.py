@@ -9,7 +9,7 @@ import typer
 
 from lfdfuse.cli.app import app
 from lfdfuse.cli.common import check_outputs, console, err_console, user_errors
-from lfdfuse.drive.options import DriveError, DriveOptions, DriveSummary
+from lfdfuse.drive.options import DriveOptions, DriveSummary
 from lfdfuse.drive.ros2.url import domain_id, ros2_url
 from lfdfuse.drive.session import drive
 from lfdfuse.network.table import load_table
@@ -114,11 +114,11 @@ def drive_cmd(
 
 def robot_url(*, connect: str | None, ros2: bool, domain: int | None) -> str:
     """The robot the options name: ``--connect URL`` or ``--ros2 [--domain N]`` (exactly one)."""
-    if ros2 == (connect is not None):
-        raise DriveError("give either --connect ws://HOST:PORT or --ros2 [--domain N]")
+    if ros2 == (connect is not None):  # bad usage (exit 2), as a missing option is
+        raise typer.BadParameter("give either --connect ws://HOST:PORT or --ros2 [--domain N]")
     if connect is not None:
         if domain is not None:
-            raise DriveError("--domain is a --ros2 option")
+            raise typer.BadParameter("--domain is a --ros2 option")
         return connect
     return ros2_url(domain_id(domain))
 

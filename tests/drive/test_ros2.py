@@ -277,3 +277,20 @@ def test_drive_ros2_command_then_sigterm(keep_left: Path, tmp_path: Path, domain
     assert report["ok"]
     commands = [json.loads(d) for _, _, _, d in iter_messages(live_log, topics=["/lfd/command"])]
     assert commands[-1]["source"] == "stop" and commands[-1]["linear"]["x"] == 0.0
+
+
+def test_the_robot_is_named_once(keep_left: Path) -> None:
+    """``--connect URL`` or ``--ros2 [--domain N]``: exactly one; anything else is bad usage (exit 2)."""
+    from typer.testing import CliRunner
+
+    from lfdfuse.cli.main import app
+
+    for args, said in (
+        ([], "give either --connect ws://HOST:PORT or --ros2"),
+        (["--ros2", "--connect", "ws://127.0.0.1:9"], "give either --connect ws://HOST:PORT or --ros2"),
+        (["--connect", "ws://127.0.0.1:9", "--domain", "3"], "--domain is a --ros2 option"),
+    ):
+        res = CliRunner().invoke(app, ["drive", str(keep_left), *args])
+        assert res.exit_code == 2 and said in " ".join(res.output.split()), (args, res.output)
+    res = CliRunner().invoke(app, ["record", "-o", "x.mcap"])
+    assert res.exit_code == 2 and "give either --connect ws://HOST:PORT or --ros2" in res.output
