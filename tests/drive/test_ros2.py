@@ -127,7 +127,10 @@ def test_scans_stop_the_robot_stops_within_half_a_second(
 
 def test_the_robot_restarts_drive_finds_it_again(keep_left: Path, tmp_path: Path, domain: int) -> None:
     """The robot's process ends and another starts: drive rediscovers it; while none is there,
-    nothing but zero Twists goes out (a spy participant hears every command on rt/cmd_vel).
+    nothing but zero Twists goes out (a spy participant hears every command on rt/cmd_vel),
+    the new link's first among them. (Whether the new robot hears that first zero depends on
+    discovery: a volatile writer's sample reaches the readers matched by then, and drive waits
+    only for the subscribers discovered so far.)
 
     The spy polls its reader from a thread: a Python listener on a reader of a topic this
     process also writes can deadlock the binding (the writer holds the GIL while it delivers
@@ -177,10 +180,9 @@ def test_the_robot_restarts_drive_finds_it_again(keep_left: Path, tmp_path: Path
     assert sum("connection lost (no publisher of /scan is left)" in n for n in live.notes) == 2
     gone, back = r1["marks"]["end"], r2["published"][0]
     while_gone = [c for c in heard if gone < c[0] < back]
+    assert while_gone, "the old link's stop and the new link's start are heard"
     assert all((v, w) == (0.0, 0.0) for _, v, w in while_gone), "no command while the robot is gone"
-    rx2 = r2["received"]
-    assert rx2 and _zero(rx2[0]), "a new link starts standing still"
-    assert any(c[2] > 0.1 for c in rx2), "drives the new robot"
+    assert any(c[2] > 0.1 for c in r2["received"]), "drives the new robot"
 
 
 def test_a_malformed_sample_is_one_warning_and_twist_stamped_is_sent(
