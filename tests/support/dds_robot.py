@@ -185,6 +185,7 @@ class Robot:
         (no beams, a NaN increment)."""
         for _ in range(3):
             ddspy_write(self.w_scan._ref, b"\x00\x01\x00\x00\x07\x00\x00\x00 not a LaserScan")
+        time.sleep(0.1)  # sent apart: a packet with a sample that does not deserialise is dropped whole
         for k in range(3):
             bad = idl.LaserScan(
                 _header(stamp_ns + k, "laser"), 0.0, 0.0, math.nan, 0.0, 0.1, 0.05, 8.0, [], []
