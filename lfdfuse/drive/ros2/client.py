@@ -26,13 +26,14 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Self
 
+from cyclonedds._clayer import ddspy_take  # the raw take the binding's own take() wraps
 from cyclonedds.builtin import (
     BuiltinDataReader,
     BuiltinTopicDcpsParticipant,
     BuiltinTopicDcpsPublication,
     BuiltinTopicDcpsSubscription,
 )
-from cyclonedds.core import DDSException, Entity, InstanceState, Listener
+from cyclonedds.core import DDSException, Entity, InstanceState, Listener, SampleState, ViewState
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.idl import IdlStruct
 from cyclonedds.pub import DataWriter
@@ -60,11 +61,11 @@ _READ: dict[Role, Callable[[Any], Record]] = {
 }
 
 
-def _take_raw(reader: DataReader[Any]) -> list[bytes]:
-    """Every new sample of ``reader`` as its serialised bytes (decoded later, one by one)."""
-    from cyclonedds._clayer import ddspy_take  # the raw take the binding's own take() wraps
-    from cyclonedds.core import InstanceState, SampleState, ViewState
-
+def _take_raw(reader: DataReader[Any] | None) -> list[bytes]:
+    """Every new sample of ``reader`` as its serialised bytes (decoded later, one by one); none
+    from a reader being deleted (the binding then hands its listener no reader)."""
+    if reader is None:
+        return []
     got = ddspy_take(reader._ref, SampleState.Any | ViewState.Any | InstanceState.Any, 64)
     if isinstance(got, int):
         return []
@@ -166,7 +167,9 @@ class Ros2Link:
         return self._topics[name]
 
     def _reader(self, w: Wanted) -> None:
-        def data(reader: DataReader[Any]) -> None:
+        def data(reader: DataReader[Any] | None) -> None:
+            if self.closed:
+                return
             arrived = time.perf_counter()
             for payload in _take_raw(reader):
                 self._put(_Data(w, payload, arrived))
