@@ -220,6 +220,29 @@ def test_a_malformed_sample_is_one_warning_and_twist_stamped_is_sent(
     assert any(c[2] > 0.1 for c in r["received"] if c[0] > r["marks"]["bad"] + 0.3)
 
 
+def test_shadow_publishes_nothing_and_measures_agreement(
+    keep_left: Path, tmp_path: Path, domain: int
+) -> None:
+    """A person drives the robot with their own teleop participant; ``--shadow`` listens to their
+    rt/cmd_vel beside the scans and publishes nothing: the robot hears only the person."""
+    robot = start_robot(
+        domain,
+        tmp_path / "robot.json",
+        *("--person", "keep-left", "--seconds", "8", "--command-timeout", "0.2", "--wait-for-listener"),
+    )
+    try:
+        robot.wait_ready()
+        live = start_drive(load_table(keep_left), ros2_url(domain), shadow=True)
+        r = robot.result()
+        live.stopper.stop("done")
+        s = live.join(60)
+    finally:
+        robot.stop()
+    assert s.sent == 0 and s.encoding == ""
+    assert len(r["received"]) == r["ticks"], "one command a tick: the person's, and nothing of drive's"
+    assert s.agreement_ticks > 20 and s.agreement_deg is not None
+
+
 def test_another_type_or_an_incompatible_qos_is_one_line(keep_left: Path, domain: int) -> None:
     """A /scan of another type and a /tf_static that is not latched: a line each, and the run
     that never finds its scan says what it saw."""
