@@ -307,6 +307,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("estimate",),
     ("execute",),
     ("drive", "learn"),
+    ("record",),  # a live robot (drive's transports) written as import writes a demo
     ("evaluate",),
     ("viz",),
     ("cli",),
@@ -413,6 +414,26 @@ def test_stages_reach_robot_types_without_another_stages_internals() -> None:
                     f"{m} imports {d}" for d in deps if any(d == b or d.startswith(b + ".") for b in banned)
                 ]
     assert not bad, "\n  ".join(bad)
+
+
+#: the only modules that may import ``cyclonedds`` (the --ros2 path; the default path never loads it)
+DDS_MODULES = {"lfdfuse.robot.idl", "lfdfuse.drive.ros2.names", "lfdfuse.drive.ros2.client"}
+
+
+def test_only_the_ros2_transport_imports_cyclonedds() -> None:
+    found = set()
+    for path in sorted(LIB.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = (
+                [a.name for a in node.names]
+                if isinstance(node, ast.Import)
+                else [node.module or ""]
+                if isinstance(node, ast.ImportFrom)
+                else []
+            )
+            if any(n == "cyclonedds" or n.startswith("cyclonedds.") for n in names):
+                found.add(_module_name(path))
+    assert found == DDS_MODULES, f"cyclonedds imported by {sorted(found - DDS_MODULES)}"
 
 
 #: a module past this many lines has taken on a second or third job: split it

@@ -53,6 +53,7 @@ COMMANDS = {
     "import": "import_cmd",
     "inspect": "inspect",
     "plot": "plot",
+    "record": "record",
     "report": "report",
     "segment": "segment",
     "simulate": "simulate",

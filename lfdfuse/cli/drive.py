@@ -1,4 +1,4 @@
-"""``lfdfuse drive``: the learned network drives a live robot over the Foxglove WebSocket protocol."""
+"""``lfdfuse drive``: the learned network drives a live robot (Foxglove WebSocket, or ROS 2 over DDS)."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import typer
 from lfdfuse.cli.app import app
 from lfdfuse.cli.common import check_outputs, console, err_console, user_errors
 from lfdfuse.drive.options import DriveOptions, DriveSummary
+from lfdfuse.drive.ros2.url import domain_id, ros2_url
 from lfdfuse.drive.session import drive
 from lfdfuse.network.table import load_table
 from lfdfuse.words import counted
@@ -19,10 +20,22 @@ from lfdfuse.words import counted
 @user_errors
 def drive_cmd(
     table: Path = typer.Argument(..., help="A fusion table YAML (from `lfdfuse estimate`)."),
-    connect: str = typer.Option(
-        ...,
+    connect: str | None = typer.Option(
+        None,
         "--connect",
         help="The robot's Foxglove WebSocket server, ws://HOST:PORT (foxglove_bridge, or `lfdfuse teleop --input foxglove`).",
+    ),
+    ros2: bool = typer.Option(
+        False,
+        "--ros2",
+        help="Join the robot's ROS 2 network over DDS instead (no bridge, no ROS install): topic /scan is the DDS topic rt/scan.",
+    ),
+    domain: int | None = typer.Option(
+        None,
+        "--domain",
+        min=0,
+        max=232,
+        help="--ros2: the DDS domain (ROS_DOMAIN_ID; default: that variable, else 0).",
     ),
     scan: str = typer.Option("/scan", "--scan", help="Laser scan topic."),
     odom: str = typer.Option(
@@ -66,16 +79,23 @@ def drive_cmd(
     and on every exit (Ctrl-C, SIGTERM, --duration, an error); a lost connection is retried
     with back-off while --duration lasts, and a new connection starts with a zero Twist.
 
+    --ros2 speaks ROS 2's DDS directly: it reads --scan and --odom (best effort), /tf and
+    /tf_static (transient local) and publishes a reliable geometry_msgs/msg/Twist (TwistStamped
+    when the robot's --cmd subscriber has that type) on --cmd; network settings are Cyclone
+    DDS's (CYCLONEDDS_URI), as for a ROS 2 node using rmw_cyclonedds.
+
     Examples:
       lfdfuse drive fusion.yaml --connect ws://robot:8765 --shadow -o shadow.mcap
       lfdfuse drive t.yaml --connect ws://robot:8765 --max-speed 0.2 -o live.mcap
       lfdfuse drive t.yaml --connect ws://localhost:8765 --duration 60
+      lfdfuse drive t.yaml --ros2 --domain 7 --shadow -o shadow.mcap
     """
+    url = robot_url(connect=connect, ros2=ros2, domain=domain)
     check_outputs([out], [table])
     tab = load_table(table)
     opts = DriveOptions(
         table=tab,
-        url=connect,
+        url=url,
         table_name=table.name,
         scan_topic=scan,
         odom_topic=odom,
@@ -86,10 +106,21 @@ def drive_cmd(
         duration_s=duration,
     )
     err_console.print(
-        f"drive {table.name} → {connect}" + (" (shadow: publishing nothing)" if shadow else ""), markup=False
+        f"drive {table.name} → {url}" + (" (shadow: publishing nothing)" if shadow else ""), markup=False
     )
     summary = drive(opts, out=out, notify=lambda line: err_console.print(line, markup=False, soft_wrap=True))
     print_summary(summary, shadow=shadow)
+
+
+def robot_url(*, connect: str | None, ros2: bool, domain: int | None) -> str:
+    """The robot the options name: ``--connect URL`` or ``--ros2 [--domain N]`` (exactly one)."""
+    if ros2 == (connect is not None):  # bad usage (exit 2), as a missing option is
+        raise typer.BadParameter("give either --connect ws://HOST:PORT or --ros2 [--domain N]")
+    if connect is not None:
+        if domain is not None:
+            raise typer.BadParameter("--domain is a --ros2 option")
+        return connect
+    return ros2_url(domain_id(domain))
 
 
 def print_summary(s: DriveSummary, *, shadow: bool) -> None:

@@ -5,6 +5,8 @@ One module per job, data flowing down this list:
 * :mod:`~lfdfuse.drive.transport` — the seam: a transport opens links, a link streams decoded
   records (role, record, arrival time) and sends commands;
 * :mod:`~lfdfuse.drive.foxglove` — the Foxglove WebSocket transport (its frames, channels, client);
+* :mod:`~lfdfuse.drive.ros2` — the ROS 2 transport over DDS (``--ros2``; ``cyclonedds``, loaded
+  only on that path);
 * :mod:`~lfdfuse.drive.decoders` — the registry: (encoding, schema) → role and decoder;
 * :mod:`~lfdfuse.drive.decode` — CDR (``ros2msg`` schemas, ``rosbags``) and lfdfuse's own JSON
   into our small records, and the ``geometry_msgs/msg/Twist`` we send;
@@ -15,5 +17,7 @@ One module per job, data flowing down this list:
 * :mod:`~lfdfuse.drive.options` — what a session is asked and what it answers;
 * :mod:`~lfdfuse.drive.lifecycle` — the run over any transport: signals, duration, reconnecting,
   the watchdog's zero Twists, latency, the summary;
-* :mod:`~lfdfuse.drive.session` — the entry: the transport of the ``--connect`` URL, then the run.
+* :mod:`~lfdfuse.drive.session` — the entry: the transport of the URL (``ws://``, ``ros2://``), then the run.
+
+``lfdfuse record`` (:mod:`lfdfuse.record`, a floor above) listens through the same transports.
 """

@@ -130,6 +130,11 @@ def typestore_for(schema_name: str, schema: str) -> Typestore:
 
 
 def _cdr_scan(m: Any) -> LiveScan:
+    start, inc, n = float(m.angle_min), float(m.angle_increment), len(m.ranges)
+    if n == 0 or not (math.isfinite(start) and math.isfinite(inc) and math.isfinite(float(m.range_max))):
+        raise DecodeError(f"a malformed LaserScan ({n} beams, angle_min {start}, increment {inc})")
+    if n > 1 and inc == 0.0:
+        raise DecodeError(f"a malformed LaserScan ({n} beams all at one bearing)")
     return LiveScan(frame_name(m.header.frame_id), scan_record(m, header_ns(m.header)))
 
 

@@ -85,6 +85,10 @@ class Link(Protocol):
         """Why :class:`Ready` has not come yet, in the protocol's words (for an error)."""
         ...
 
+    def publishers(self, topic: str) -> tuple[str, ...]:
+        """The names of the nodes publishing on ``topic``, where the protocol reports them (else none)."""
+        ...
+
     async def close(self) -> None:
         """Say goodbye and close (never raises)."""
         ...

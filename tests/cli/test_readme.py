@@ -154,7 +154,8 @@ def _clean_env() -> dict[str, str]:
 DEFAULT_OUT = {"simulate": "demo.mcap", "estimate": "fusion.yaml"}
 #: the options that name a file a command writes
 OUT_OPTIONS = ("-o", "--out", "--report", "--json")
-LIVE = ("teleop", "drive")  # live: teleop through a pty (tests/sources), drive against a robot (tests/drive)
+#: live: teleop through a pty (tests/sources), drive and record against a robot (tests/drive, tests/record)
+LIVE = ("teleop", "drive", "record")
 
 
 def _outputs(args: list[str]) -> list[str]:

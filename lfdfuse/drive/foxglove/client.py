@@ -163,6 +163,9 @@ class FoxgloveLink:
         names = ", ".join(self.subs.advertised_topics()) or "none"
         return f"the server advertises no scan on {self.topics.scan} (it has: {names})"
 
+    def publishers(self, topic: str) -> tuple[str, ...]:
+        return ()  # the protocol does not name them
+
     async def close(self) -> None:
         try:
             if self.advertised:

@@ -29,7 +29,7 @@ from lfdfuse.robot.records import ScanRecord, same_geometry
 from lfdfuse.sources.importers import open_source
 from lfdfuse.sources.importers.derive import commands_from_poses
 from lfdfuse.sources.importers.goals import REACH_M, Goal, goal_detections
-from lfdfuse.sources.importers.records import Publisher, SourceError, TopicChoice
+from lfdfuse.sources.importers.records import Publisher, Source, SourceError, TopicChoice
 
 ODOM_FRAME = "odom"
 CmdFrom = Literal["auto", "cmd", "odom"]
@@ -86,6 +86,21 @@ def import_log(
     if Path(out).resolve() == path.resolve():
         raise SourceError("the output must not overwrite the input")
     src = open_source(path, fmt=options.fmt, topics=options.topics)
+    return write_demo(src, source=str(source), out=out, options=options)
+
+
+def write_demo(
+    src: Source,
+    *,
+    source: str,
+    out: str | Path,
+    options: ImportOptions = ImportOptions(),
+    command: str = "import",
+) -> ImportSummary:
+    """Write an opened :class:`Source` as an lfdfuse demo MCAP at ``out`` (written atomically):
+    what ``import`` writes, for a log on disk or for what ``record`` received from a live robot
+    (``command`` names the tool in the provenance; ``source`` where the records came from)."""
+    path = source
     info = src.info
     notes = list(info.notes)
 
@@ -159,7 +174,7 @@ def import_log(
     meta = {
         "tool": "lfdfuse",
         "version": __version__,
-        "command": "import",
+        "command": command,
         "source": str(source),
         "format": info.format,
         **{f"{role}_topic": name for role, name in topics.items()},
