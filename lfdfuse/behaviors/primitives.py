@@ -114,6 +114,9 @@ class BehaviorOutputs:
     @property
     def bac(self) -> np.ndarray:
         """The BAC bit mask ``(N,)`` int64: bit i set ⇔ ``names[i]`` applicable."""
+        if self.applicable.shape[0] == 1:  # a live tick: the same bits without the array work
+            mask = sum(1 << j for j, a in enumerate(self.applicable[0].tolist()) if a)
+            return np.array([mask], dtype=np.int64)
         bits = np.left_shift(np.int64(1), np.arange(len(self.names), dtype=np.int64))
         return np.asarray((self.applicable.astype(np.int64) * bits).sum(axis=1))
 
