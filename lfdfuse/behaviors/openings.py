@@ -265,7 +265,8 @@ class OpeningSensor:
         while len(self._path) > 1 and self._path[1][0] <= self._odo_m - self.params.lag_m:
             self._path.popleft()
         ranges = np.asarray(ranges_m, dtype=np.float64)
-        self._corridor.append((self._odo_m, self._in_corridor(ranges)))
+        compiled = kernels.SIDE_OPEN.ready() and kernels.CORRIDOR.ready() and kernels.AHEAD.ready()
+        self._corridor.append((self._odo_m, self._in_corridor(ranges, compiled)))
         back = self._odo_m - self.params.lag_m - self.params.corridor_back_m
         while len(self._corridor) > 1 and self._corridor[1][0] <= back:
             self._corridor.popleft()
@@ -274,7 +275,7 @@ class OpeningSensor:
         held = self._path[0][1] if self.holding else self._heading
         held_turn, self._held = held - self._held, held
         self.held_turn_rad = self._heading - held
-        if kernels.SIDE_OPEN.ready():
+        if compiled:
             flags, self.ahead_m = self._compiled(ranges, held - self._heading)
         else:
             flags = side_openings_reference(
@@ -303,9 +304,9 @@ class OpeningSensor:
         )
         return flags[0], float(kernels.AHEAD(ranges, ahead, p.ahead_beam_rad))
 
-    def _in_corridor(self, ranges: np.ndarray) -> bool:
+    def _in_corridor(self, ranges: np.ndarray, compiled: bool = False) -> bool:
         """Walls abeam on both sides, at most ``open_m`` apart (a beam with no return is far)."""
-        if kernels.CORRIDOR.ready():
+        if compiled:
             return bool(kernels.CORRIDOR(ranges, *self._abeam_at, self.params.open_m))
         r = np.where(np.isfinite(ranges) & (ranges > 0.0), ranges, np.inf)
         left, right = r[self._abeam[0]], r[self._abeam[1]]
