@@ -137,8 +137,6 @@ class BehaviorState:
             if s is None:
                 raise ConfigError(f"unknown behaviour {name!r}")
             self.primitives.append(s.make(name, params))
-        #: the fused ops of :func:`compute`'s compiled loop, per scanner layout and sonars
-        self.plans: dict[object, _Plan] = {}
 
     def reset(self) -> None:
         for p in self.primitives:
@@ -251,6 +249,10 @@ def _plan(scan: Scan, state: BehaviorState, sonar: bool) -> _Plan:
 
 _NO_SONAR = np.zeros((1, 0))
 
+#: the plans of the behaviour sets computed lately, per set, parameters, layout, targets and
+#: sonars (the sonar angles by identity, checked against the plan's own)
+_PLANS: dict[tuple[object, ...], _Plan] = {}
+
 
 def _fused(
     scan: Scan, state: BehaviorState, vec: np.ndarray, app: np.ndarray, goal: np.ndarray
@@ -262,10 +264,18 @@ def _fused(
     sonar = obs.sonar_m if obs.sonar_angles_rad is not None else None
     if scan.r.dtype != np.float64 or (sonar is not None and sonar.dtype != np.float64):
         return frozenset()
-    key = (obs.geometry, obs.target_names, id(obs.sonar_angles_rad) if sonar is not None else 0)
-    plan = state.plans.get(key)
+    key = (
+        state.names,
+        params,
+        obs.geometry,
+        obs.target_names,
+        id(obs.sonar_angles_rad) if sonar is not None else 0,
+    )
+    plan = _PLANS.get(key)
     if plan is None or (sonar is not None and plan.sonar_angles is not obs.sonar_angles_rad):
-        plan = state.plans[key] = _plan(scan, state, sonar is not None)
+        if len(_PLANS) >= 64:
+            _PLANS.clear()
+        plan = _PLANS[key] = _plan(scan, state, sonar is not None)
     if len(plan.ops):
         thr = params.sonar_threshold_m
         kernels.POOL(

@@ -234,15 +234,24 @@ def bench_behaviors(rows: list[Row], folder: Path) -> None:
                 compute(one, names)
             return 200
 
+        live = rate(per_scan)
+        with numpy_kernels():
+            whole_ref, live_ref = rate(whole), rate(per_scan)
         rows.append(
             Row(
                 f"behaviour outputs, {preset}, whole log",
                 rate(whole),
                 "scans/s",
                 "per-scan loop",
-                rate(per_scan),
+                live,
                 target,
             )
+        )
+        rows.append(
+            Row(f"behaviour outputs, {preset}, whole log", rate(whole), "scans/s", "numpy kernels", whole_ref)
+        )
+        rows.append(
+            Row(f"behaviour outputs, {preset}, per scan (live)", live, "scans/s", "numpy kernels", live_ref)
         )
 
 
