@@ -70,7 +70,7 @@ def _ahead_loop(r: np.ndarray, a: np.ndarray, beam: float) -> float:
         return np.inf
     s = np.sort(vals[:k])
     h = k // 2
-    return s[h] if k % 2 else (s[h - 1] + s[h]) / 2.0
+    return float(s[h]) if k % 2 else float((s[h - 1] + s[h]) / 2.0)
 
 
 def _corridor_loop(r: np.ndarray, left: np.ndarray, right: np.ndarray, open_m: float) -> bool:

@@ -131,6 +131,7 @@ def _logsumexp_rows_loop(a: np.ndarray) -> np.ndarray:
     stack_n = np.empty(64, dtype=np.int64)
     stack_st = np.empty(64, dtype=np.int64)
     vals = np.empty(64)
+    sums = np.zeros(2)
     for i in range(rows):
         top = -np.inf
         nan = False
@@ -145,7 +146,6 @@ def _logsumexp_rows_loop(a: np.ndarray) -> np.ndarray:
         count = 0.0
         for j in range(length):
             count += 1.0 if a[i, j] == top else 0.0
-        sums = np.zeros(2)
         for pass_ in range(2):
             for j in range(length):
                 x = a[i, j]
