@@ -392,8 +392,8 @@ def bench_estimate(rows: list[Row], folder: Path, quick: bool = False) -> None:
 
 def bench_execute(rows: list[Row], folder: Path) -> None:
     """``execute`` of a table learned from a three-goal tour, against ``simulate`` of the same
-    task's teacher (its first run in the process, as a command runs it, and reruns, whose
-    planner fields are built), and against itself with the numpy reference kernels. The reruns
+    task's teacher (its first run in the process, as a command runs it, and reruns, the map's
+    setup done), and against itself with the numpy reference kernels. The reruns
     alternate, two rounds, the best of each kept: on a shared machine a rate measured minutes
     apart from its baseline says more about the load than the code."""
     from lfdfuse.execute.run import ExecuteOptions, run_table
@@ -426,7 +426,7 @@ def bench_execute(rows: list[Row], folder: Path) -> None:
         rates["exec"].append(execute())
         rates["ref"].append(execute(numpy=True))
     fast, sim_rate, ref = max(rates["exec"]), max(rates["sim"]), max(rates["ref"])
-    first = demo.steps / demo.wall_s  # the process's first simulate: the teacher's planner fields built
+    first = demo.steps / demo.wall_s  # the process's first simulate of the task, as a command runs it
     rows.append(
         Row("execute building, with /lfd logging", fast, "ticks/s", "simulate, same task", first, 1000.0)
     )
