@@ -28,6 +28,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from lfdfuse.behaviors import kernels
 from lfdfuse.robot.readings import ScanGeometry
 
 LEFT, RIGHT = 0, 1
@@ -79,7 +80,47 @@ def ahead_range(
 ) -> float:
     """How far the way ahead is open (m) in a scan ``(B,)``: the median of the beams within
     ``ahead_beam_rad`` of the heading ``offset_rad`` from the robot's (+ = left; the sectors'
-    held heading); a beam with no return reaches far. Inf for a scanner that does not look there."""
+    held heading); a beam with no return reaches far. Inf for a scanner that does not look there.
+
+    Compiled where it can be (:data:`~lfdfuse.behaviors.kernels.AHEAD`, the same number);
+    :func:`ahead_range_reference` is the numpy."""
+    if not kernels.AHEAD.ready():
+        return ahead_range_reference(ranges_m, geometry, params, offset_rad=offset_rad)
+    a = _ahead_bearings(geometry) if offset_rad == 0.0 else _wrap(geometry.angles - offset_rad)
+    return float(kernels.AHEAD(np.asarray(ranges_m, dtype=np.float64), a, params.ahead_beam_rad))
+
+
+def _wrap(a: np.ndarray) -> np.ndarray:
+    return np.asarray(np.arctan2(np.sin(a), np.cos(a)))
+
+
+@lru_cache(maxsize=16)
+def _ahead_bearings(geometry: ScanGeometry) -> np.ndarray:
+    """The bearings :func:`ahead_range_reference` looks along with no offset (``angles − 0``, wrapped)."""
+    a = _wrap(geometry.angles - 0.0)
+    a.flags.writeable = False
+    return a
+
+
+@lru_cache(maxsize=16)
+def _side_bearings(geometry: ScanGeometry) -> np.ndarray:
+    """The bearings :func:`side_openings_reference` looks along with a zero offset (wrapped twice)."""
+    a = _wrap(_bearings(geometry) - 0.0)
+    a.flags.writeable = False
+    return a
+
+
+@lru_cache(maxsize=16)
+def _wrapped(geometry: ScanGeometry) -> bool:
+    """Whether the layout's angles are their own wrapped bearings, bit for bit (then one wrap
+    serves both the side sectors and the way ahead)."""
+    return bool(np.array_equal(_bearings(geometry), geometry.angles))
+
+
+def ahead_range_reference(
+    ranges_m: np.ndarray, geometry: ScanGeometry, params: OpeningParams, *, offset_rad: float = 0.0
+) -> float:
+    """:func:`ahead_range` in numpy: the reference."""
     a = geometry.angles - offset_rad
     a = np.arctan2(np.sin(a), np.cos(a))
     r = np.asarray(ranges_m, dtype=np.float64)[np.abs(a) <= params.ahead_beam_rad]
@@ -117,7 +158,30 @@ def side_openings(
     cover a side sector never sees an opening there. ``offset_rad (N,)`` turns the sectors of
     each scan by that angle (+ = left): sectors fixed to an earlier heading, for a robot that
     has already begun to turn.
+
+    Compiled where it can be (:data:`~lfdfuse.behaviors.kernels.SIDE_OPEN`, the same flags);
+    :func:`side_openings_reference` is the numpy.
     """
+    if not kernels.SIDE_OPEN.ready():
+        return side_openings_reference(ranges_m, geometry, params, offset_rad=offset_rad)
+    r = np.atleast_2d(np.asarray(ranges_m, dtype=np.float64))
+    a = _bearings(geometry)[None, :]
+    if offset_rad is not None:
+        a = _wrap(a - np.asarray(offset_rad, dtype=np.float64).reshape(-1, 1))
+    out = np.zeros((r.shape[0], 2), dtype=bool)
+    far_m = min(params.open_m, geometry.max_range_m)
+    kernels.SIDE_OPEN(r, a, far_m, params.inner_rad, params.outer_rad, params.fraction, out)
+    return out
+
+
+def side_openings_reference(
+    ranges_m: np.ndarray,
+    geometry: ScanGeometry,
+    params: OpeningParams,
+    *,
+    offset_rad: np.ndarray | None = None,
+) -> np.ndarray:
+    """:func:`side_openings` in numpy: the reference."""
     r = np.atleast_2d(np.asarray(ranges_m, dtype=np.float64))
     a = _bearings(geometry)[None, :]
     if offset_rad is not None:
@@ -185,6 +249,7 @@ class OpeningSensor:
             np.abs(a - math.pi / 2) <= params.corridor_beam_rad,
             np.abs(a + math.pi / 2) <= params.corridor_beam_rad,
         )
+        self._abeam_at = (np.flatnonzero(self._abeam[0]), np.flatnonzero(self._abeam[1]))
         #: the sectors are held now (the robot was in a corridor ``lag_m`` ago)
         self.holding = False
         #: how far the robot has turned (rad, + = left) from the heading the sectors are held at
@@ -200,7 +265,8 @@ class OpeningSensor:
         while len(self._path) > 1 and self._path[1][0] <= self._odo_m - self.params.lag_m:
             self._path.popleft()
         ranges = np.asarray(ranges_m, dtype=np.float64)
-        self._corridor.append((self._odo_m, self._in_corridor(ranges)))
+        compiled = kernels.SIDE_OPEN.ready() and kernels.CORRIDOR.ready() and kernels.AHEAD.ready()
+        self._corridor.append((self._odo_m, self._in_corridor(ranges, compiled)))
         back = self._odo_m - self.params.lag_m - self.params.corridor_back_m
         while len(self._corridor) > 1 and self._corridor[1][0] <= back:
             self._corridor.popleft()
@@ -209,19 +275,39 @@ class OpeningSensor:
         held = self._path[0][1] if self.holding else self._heading
         held_turn, self._held = held - self._held, held
         self.held_turn_rad = self._heading - held
-        flags = side_openings(
-            ranges[None, :],
-            self.geometry,
-            self.params,
-            offset_rad=np.array([held - self._heading]),
-        )[0]
+        if compiled:
+            flags, self.ahead_m = self._compiled(ranges, held - self._heading)
+        else:
+            flags = side_openings_reference(
+                ranges[None, :], self.geometry, self.params, offset_rad=np.array([held - self._heading])
+            )[0]
+            self.ahead_m = ahead_range_reference(
+                ranges, self.geometry, self.params, offset_rad=held - self._heading
+            )
         if self.holding and self._spinning():
             flags = np.zeros(2, dtype=bool)
-        self.ahead_m = ahead_range(ranges, self.geometry, self.params, offset_rad=held - self._heading)
         return self.tracker.update(flags, held_turn)
 
-    def _in_corridor(self, ranges: np.ndarray) -> bool:
+    def _compiled(self, ranges: np.ndarray, offset: float) -> tuple[np.ndarray, float]:
+        """The open flags and the way ahead of :meth:`update` by the compiled loops: the same
+        bearings as the references wrap (once, where the layout's are already wrapped)."""
+        g, p = self.geometry, self.params
+        if offset == 0.0:
+            side, ahead = _side_bearings(g), _ahead_bearings(g)
+        else:
+            side = _wrap(_bearings(g) - offset)
+            ahead = side if _wrapped(g) else _wrap(g.angles - offset)
+        flags = np.zeros((1, 2), dtype=bool)
+        r = ranges[None, :]
+        kernels.SIDE_OPEN(
+            r, side[None, :], min(p.open_m, g.max_range_m), p.inner_rad, p.outer_rad, p.fraction, flags
+        )
+        return flags[0], float(kernels.AHEAD(ranges, ahead, p.ahead_beam_rad))
+
+    def _in_corridor(self, ranges: np.ndarray, compiled: bool = False) -> bool:
         """Walls abeam on both sides, at most ``open_m`` apart (a beam with no return is far)."""
+        if compiled:
+            return bool(kernels.CORRIDOR(ranges, *self._abeam_at, self.params.open_m))
         r = np.where(np.isfinite(ranges) & (ranges > 0.0), ranges, np.inf)
         left, right = r[self._abeam[0]], r[self._abeam[1]]
         if not len(left) or not len(right):

@@ -17,7 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lfdfuse.behaviors import kernels
 from lfdfuse.behaviors.catalogue import BASE_BEHAVIORS, spec_of
+from lfdfuse.behaviors.library.attract import Attract
 from lfdfuse.behaviors.spec import (
     ATTRACT,
     BehaviorParams,
@@ -112,6 +114,9 @@ class BehaviorOutputs:
     @property
     def bac(self) -> np.ndarray:
         """The BAC bit mask ``(N,)`` int64: bit i set ⇔ ``names[i]`` applicable."""
+        if self.applicable.shape[0] == 1:  # a live tick: the same bits without the array work
+            mask = sum(1 << j for j, a in enumerate(self.applicable[0].tolist()) if a)
+            return np.array([mask], dtype=np.int64)
         bits = np.left_shift(np.int64(1), np.arange(len(self.names), dtype=np.int64))
         return np.asarray((self.applicable.astype(np.int64) * bits).sum(axis=1))
 
@@ -158,7 +163,10 @@ def compute(
     vec = np.zeros((n, k, 2))
     app = np.zeros((n, k), dtype=bool)
     goal = np.zeros((n, k), dtype=bool)
+    done = _fused(scan, state, vec, app, goal) if kernels.POOL.ready() else frozenset()
     for i, primitive in enumerate(state.primitives):
+        if i in done:
+            continue
         res = primitive.step(scan)
         a = res.applicable
         vec[:, i] = np.where(a[:, None], res.vector, 0.0)
@@ -166,3 +174,132 @@ def compute(
         if res.goal is not None:
             goal[:, i] = res.goal
     return BehaviorOutputs(state.names, vec, app, goal)
+
+
+_KINDS = {
+    "avoid": kernels.AVOID,
+    "wander": kernels.WANDER,
+    "wall_attract": kernels.WALL_ATTRACT,
+    "wall_side": kernels.WALL_SIDE,
+    "sonar_avoid": kernels.SONAR_AVOID,
+}
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """What :func:`_fused` computes of a behaviour set on one scanner layout, sonar layout and
+    target list: the compiled loop's ops ``(M, 3)`` (kind, sector, column), ``sectors (3, B)``
+    (front, left, right), ``dirs (M, max(B, S), 2)`` (each op's directions as its numpy
+    primitive pools them), the ``attract_<target>`` columns and their targets' indices."""
+
+    sonar_angles: np.ndarray | None
+    ops: np.ndarray
+    sectors: np.ndarray
+    dirs: np.ndarray
+    attract_cols: list[int]
+    attract_targets: list[int]
+    done: frozenset[int]
+
+
+def _plan(scan: Scan, state: BehaviorState, sonar: bool) -> _Plan:
+    obs, beams = scan.obs, scan.beams
+    sonar_dirs = None
+    if sonar and obs.sonar_angles_rad is not None:
+        a = obs.sonar_angles_rad
+        sonar_dirs = -np.column_stack([np.cos(a), np.sin(a)])
+    size = max(len(beams.ang), 0 if sonar_dirs is None else len(sonar_dirs))
+    ops: list[tuple[int, int, int]] = []
+    dirs: list[np.ndarray] = []
+    cols: list[int] = []
+    targets: list[int] = []
+    for col, p in enumerate(state.primitives):
+        if isinstance(p, Attract):
+            if p.target in obs.target_names:
+                cols.append(col)
+                targets.append(obs.target_names.index(p.target))
+            continue
+        fused = getattr(p, "fused", None)
+        if fused is None:
+            continue
+        kind, sector, turn = fused
+        if kind == "sonar_avoid":
+            if sonar_dirs is None:
+                continue  # never applicable: the primitive's own zeros
+            d = sonar_dirs
+        elif kind == "avoid":
+            d = beams.away
+        elif kind == "wall_side":
+            d = beams.tangent(turn)
+        else:
+            d = beams.dirs
+        block = np.zeros((size, 2))
+        block[: len(d)] = d
+        ops.append((_KINDS[kind], ("front", "left", "right").index(sector) if sector else 0, col))
+        dirs.append(block)
+    return _Plan(
+        obs.sonar_angles_rad if sonar else None,
+        np.asarray(ops, dtype=np.int64).reshape(-1, 3),
+        np.stack([beams.front, beams.left, beams.right]),
+        np.asarray(dirs, dtype=np.float64).reshape(-1, size, 2),
+        cols,
+        targets,
+        frozenset([c for _, _, c in ops] + cols),
+    )
+
+
+_NO_SONAR = np.zeros((1, 0))
+
+#: the plans of the behaviour sets computed lately, per set, parameters, layout, targets and
+#: sonars (the sonar angles by identity, checked against the plan's own)
+_PLANS: dict[tuple[object, ...], _Plan] = {}
+
+
+def _fused(
+    scan: Scan, state: BehaviorState, vec: np.ndarray, app: np.ndarray, goal: np.ndarray
+) -> frozenset[int]:
+    """Compute the primitives that have a fused loop (:data:`~lfdfuse.behaviors.kernels.POOL`)
+    and the ``attract_<target>`` ones (all targets at once) into ``vec``, ``app``, ``goal``: the
+    same numbers as their own :meth:`~lfdfuse.behaviors.spec.Primitive.step`. The columns done."""
+    obs, params = scan.obs, scan.params
+    sonar = obs.sonar_m if obs.sonar_angles_rad is not None else None
+    if scan.r.dtype != np.float64 or (sonar is not None and sonar.dtype != np.float64):
+        return frozenset()
+    key = (
+        state.names,
+        params,
+        obs.geometry,
+        obs.target_names,
+        id(obs.sonar_angles_rad) if sonar is not None else 0,
+    )
+    plan = _PLANS.get(key)
+    if plan is None or (sonar is not None and plan.sonar_angles is not obs.sonar_angles_rad):
+        if len(_PLANS) >= 64:
+            _PLANS.clear()
+        plan = _PLANS[key] = _plan(scan, state, sonar is not None)
+    if len(plan.ops):
+        thr = params.sonar_threshold_m
+        kernels.POOL(
+            np.ascontiguousarray(scan.r),
+            scan.own,
+            obs.geometry.max_range_m,
+            params.d_max_m,
+            _NO_SONAR if sonar is None else np.ascontiguousarray(sonar),
+            min(thr, obs.sonar_max_m),
+            thr,
+            plan.ops,
+            plan.sectors,
+            plan.dirs,
+            vec,
+            app,
+        )
+    cols = plan.attract_cols
+    if cols:
+        js = plan.attract_targets
+        b, tr = obs.target_bearing_rad[:, js], obs.target_range_m[:, js]
+        a = np.isfinite(b) & np.isfinite(tr)
+        bb = np.where(a, b, 0.0)
+        vec[:, cols, 0] = np.where(a, np.cos(bb), 0.0)
+        vec[:, cols, 1] = np.where(a, np.sin(bb), 0.0)
+        app[:, cols] = a
+        goal[:, cols] = a & (np.where(a, tr, np.inf) <= params.reach_m)
+    return plan.done

@@ -308,11 +308,20 @@ class Primitive(Protocol):
     def step(self, scan: Scan) -> Result: ...
 
 
-class Stateless:
-    """A primitive that remembers nothing between scans: a function of the block alone."""
+#: a primitive :func:`~lfdfuse.behaviors.primitives.compute` may run in its fused compiled loop
+#: (:data:`~lfdfuse.behaviors.kernels.POOL`): its kind, the sector it looks at (``front``,
+#: ``left``, ``right``; "" for all) and the turn of its pooled directions from the beams
+Fused = tuple[Literal["avoid", "sonar_avoid", "wander", "wall_attract", "wall_side"], str, float]
 
-    def __init__(self, fn: Callable[[Scan], Result]) -> None:
+
+class Stateless:
+    """A primitive that remembers nothing between scans: a function of the block alone.
+
+    ``fused`` says which compiled loop computes the same outputs (None: only ``fn`` does)."""
+
+    def __init__(self, fn: Callable[[Scan], Result], fused: Fused | None = None) -> None:
         self.fn = fn
+        self.fused = fused
 
     def reset(self) -> None:
         pass
@@ -354,6 +363,9 @@ class BehaviorSpec:
         return name.startswith(self.name) and len(name) > len(self.name) if self.family else name == self.name
 
 
-def stateless(fn: Callable[[Scan], Result]) -> Callable[[str, BehaviorParams], Primitive]:
-    """A spec's ``make`` for a primitive that is a function of the block alone."""
-    return lambda _name, _params: Stateless(fn)
+def stateless(
+    fn: Callable[[Scan], Result], fused: Fused | None = None
+) -> Callable[[str, BehaviorParams], Primitive]:
+    """A spec's ``make`` for a primitive that is a function of the block alone (``fused``: the
+    compiled loop that computes it too, see :class:`Stateless`)."""
+    return lambda _name, _params: Stateless(fn, fused)

@@ -87,6 +87,10 @@ def _sum_cos_loop(along: np.ndarray, across: np.ndarray, wt: np.ndarray, block: 
 SUM_COS = kernel(_sum_cos_loop)
 
 
+#: ``math.exp(x) == 0.0`` for every ``x`` below this (the smallest subnormal is ``exp(-744.4)``)
+_EXP_ZERO = -750.0
+
+
 def _log_marginal_loop(s: np.ndarray, steps: float, kappas: np.ndarray, log_norm: np.ndarray) -> np.ndarray:
     """:func:`~lfdfuse.estimate.model.log_marginal` for ``S (P,)`` of rows of ``steps`` steps, as one loop."""
     j_count = len(kappas)
@@ -102,10 +106,139 @@ def _log_marginal_loop(s: np.ndarray, steps: float, kappas: np.ndarray, log_norm
                 top = x
         acc = 0.0
         for j in range(j_count):
-            acc += math.exp(terms[j] - top)
+            d = terms[j] - top
+            # exp of anything below -745.2 is +0.0, and adding +0.0 leaves the sum as it is: the
+            # nodes far from the peak (most of them, on a long row) cost no exp (NaN still adds)
+            if not d < _EXP_ZERO:
+                acc += math.exp(d)
         out[p] = top + math.log(acc) - log_j
     return out
 
 
 #: :func:`_log_marginal_loop`, compiled on first use
 LOG_MARGINAL = kernel(_log_marginal_loop)
+
+
+def _logsumexp_rows_loop(a: np.ndarray) -> np.ndarray:
+    """``scipy.special.logsumexp(a, axis=-1)`` of rows ``a (R, L)`` (real, no ``b``), operation for
+    operation as scipy 1.17 computes it: the maximum's terms counted apart (``log1p`` of the
+    rest's sum over their count, plus the log of the count), the sum over a row numpy's pairwise
+    sum, and where that is not finite the plain ``log(Σ exp a)``."""
+    rows, length = a.shape
+    out = np.empty(rows)
+    buf = np.empty(max(length, 1))
+    stack_lo = np.empty(64, dtype=np.int64)
+    stack_n = np.empty(64, dtype=np.int64)
+    stack_st = np.empty(64, dtype=np.int64)
+    vals = np.empty(64)
+    sums = np.zeros(2)
+    for i in range(rows):
+        top = -np.inf
+        nan = False
+        for j in range(length):
+            x = a[i, j]
+            if x != x:
+                nan = True
+            elif x > top:
+                top = x
+        if nan:
+            top = np.nan
+        count = 0.0
+        for j in range(length):
+            count += 1.0 if a[i, j] == top else 0.0
+        for pass_ in range(2):
+            for j in range(length):
+                x = a[i, j]
+                if pass_ == 0:
+                    buf[j] = math.exp((-np.inf if x == top else x) - top)
+                else:
+                    buf[j] = math.exp(x)
+            # numpy's pairwise sum of buf[:length] (post-order over its split tree)
+            vp = 0
+            stack_lo[0] = 0
+            stack_n[0] = length
+            stack_st[0] = 0
+            sp = 1
+            while sp > 0:
+                lo = stack_lo[sp - 1]
+                cnt = stack_n[sp - 1]
+                if cnt <= 128:
+                    sp -= 1
+                    if cnt < 8:
+                        res = 0.0
+                        for k in range(cnt):
+                            res += buf[lo + k]
+                    else:
+                        a0 = buf[lo]
+                        a1 = buf[lo + 1]
+                        a2 = buf[lo + 2]
+                        a3 = buf[lo + 3]
+                        a4 = buf[lo + 4]
+                        a5 = buf[lo + 5]
+                        a6 = buf[lo + 6]
+                        a7 = buf[lo + 7]
+                        k = 8
+                        stop = cnt - cnt % 8
+                        while k < stop:
+                            a0 += buf[lo + k]
+                            a1 += buf[lo + k + 1]
+                            a2 += buf[lo + k + 2]
+                            a3 += buf[lo + k + 3]
+                            a4 += buf[lo + k + 4]
+                            a5 += buf[lo + k + 5]
+                            a6 += buf[lo + k + 6]
+                            a7 += buf[lo + k + 7]
+                            k += 8
+                        res = ((a0 + a1) + (a2 + a3)) + ((a4 + a5) + (a6 + a7))
+                        while k < cnt:
+                            res += buf[lo + k]
+                            k += 1
+                    vals[vp] = res
+                    vp += 1
+                elif stack_st[sp - 1] == 0:
+                    stack_st[sp - 1] = 1
+                    half = cnt // 2
+                    half -= half % 8
+                    stack_lo[sp] = lo + half
+                    stack_n[sp] = cnt - half
+                    stack_st[sp] = 0
+                    stack_lo[sp + 1] = lo
+                    stack_n[sp + 1] = half
+                    stack_st[sp + 1] = 0
+                    sp += 2
+                else:
+                    sp -= 1
+                    vals[vp - 2] = vals[vp - 2] + vals[vp - 1]
+                    vp -= 1
+            sums[pass_] = 0.0 + vals[0]
+            if pass_ == 0:
+                s = sums[0]
+                s = s if s == 0 else s / count
+                sgn = np.sign(s + 1.0) * np.sign(count)
+                if s < -1.0:
+                    s = -s - 2.0
+                r = math.log1p(s) + math.log(abs(count)) + top
+                if sgn < 0:
+                    r = np.nan
+                if np.isfinite(r):
+                    out[i] = r
+                    break
+            else:
+                out[i] = math.log(sums[1])
+    return out
+
+
+#: :func:`_logsumexp_rows_loop`, compiled on first use
+LOGSUMEXP_ROWS = kernel(_logsumexp_rows_loop)
+
+
+def logsumexp_last(a: np.ndarray, *, keepdims: bool = False) -> np.ndarray:
+    """``scipy.special.logsumexp(a, axis=-1, keepdims=keepdims)`` of a real float64 array, in
+    one compiled pass where it can be (the same numbers), else scipy's."""
+    from scipy.special import logsumexp
+
+    if a.dtype != np.float64 or a.ndim == 0 or a.shape[-1] == 0 or not LOGSUMEXP_ROWS.ready():
+        return np.asarray(logsumexp(a, axis=-1, keepdims=keepdims))
+    flat = np.ascontiguousarray(a).reshape(-1, a.shape[-1])
+    out = LOGSUMEXP_ROWS(flat).reshape(a.shape[:-1] + ((1,) if keepdims else ()))
+    return np.asarray(out)

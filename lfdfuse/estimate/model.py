@@ -128,7 +128,7 @@ import numpy as np
 from scipy.special import i0e, logsumexp
 
 from lfdfuse.estimate import kernels
-from lfdfuse.estimate.kernels import LOG_MARGINAL, SUM_COS, sum_cos_reference
+from lfdfuse.estimate.kernels import LOG_MARGINAL, SUM_COS, logsumexp_last, sum_cos_reference
 
 
 @dataclass(frozen=True)
@@ -421,7 +421,7 @@ def discrete_log_marginal(data: DiscreteRowData, w: np.ndarray, model: FusionMod
         p += lapse[c : c + block, None, None] if isinstance(lapse, np.ndarray) else lapse
         np.log(p, out=p)
         ll += p.sum(axis=0)
-    return np.asarray(logsumexp(ll, axis=1) - math.log(j))
+    return np.asarray(logsumexp_last(ll) - math.log(j))
 
 
 def row_loglik(data: Row, w: np.ndarray, model: FusionModel, *, of: int | None = None) -> np.ndarray:

@@ -28,9 +28,8 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import logsumexp
 
-from lfdfuse.estimate.kernels import LOG_MARGINAL, SUM_COS
+from lfdfuse.estimate.kernels import LOG_MARGINAL, SUM_COS, logsumexp_last
 from lfdfuse.estimate.model import FusionModel, Row, RowData, log_prior_alr, row_loglik, sample_prior
 from lfdfuse.estimate.resampling import ess, gather, resample
 
@@ -200,7 +199,7 @@ class TemperedSMC:
         active = self.final_done < self.params.final_moves
         delta = self._next_delta(active)
         inc = delta[:, None] * self.ll
-        self.log_evidence += np.where(active, logsumexp(inc, axis=1) - math.log(inc.shape[1]), 0.0)
+        self.log_evidence += np.where(active, logsumexp_last(inc) - math.log(inc.shape[1]), 0.0)
         idx = resample(inc, self.rng)
         self.logw = gather(self.logw, idx)
         self.ll = gather(self.ll, idx)
@@ -261,7 +260,7 @@ class TemperedSMC:
         z = self.rng.standard_normal((c, m, n))
         step = np.einsum("cij,cmj->cmi", chol, z) * self.scale[:, None, None]
         y_new = np.where(free[:, None, :], y + step, np.where(mask, y, -np.inf))
-        logw_new = y_new - logsumexp(y_new, axis=2, keepdims=True)
+        logw_new = y_new - logsumexp_last(y_new, keepdims=True)
         ll_new = self._loglik(logw_new, active)
         prior = log_prior_alr(self.logw, mask, self.model)
         prior_new = log_prior_alr(logw_new, mask, self.model)

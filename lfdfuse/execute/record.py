@@ -40,8 +40,9 @@ class LfdRecorder:
         app = out.applicable[0]
         log = self.log
         log.write_raw("/lfd/behaviors", t_ns, lfd.encode_behaviors(t_ns, names, vec, app, out.goal_met[0]))
+        applicable = app.tolist()
         log.write_raw(
-            "/lfd/bac", t_ns, lfd.encode_bac(t_ns, dec.bac, [n for j, n in enumerate(names) if app[j]])
+            "/lfd/bac", t_ns, lfd.encode_bac(t_ns, dec.bac, [n for j, n in enumerate(names) if applicable[j]])
         )
         log.write_raw(
             "/lfd/step",
@@ -58,15 +59,16 @@ class LfdRecorder:
         log.write_raw(
             "/lfd/fused", t_ns, lfd.encode_fused(t_ns, float(dec.fused[0]), float(dec.fused[1]), dec.weights)
         )
+        xy = vec.tolist()  # Python floats: the same numbers as float(vec[j, i])
         arrows = [
             msg.Arrow(
-                dec.weights[n] * float(vec[j, 0]),
-                dec.weights[n] * float(vec[j, 1]),
+                dec.weights[n] * xy[j][0],
+                dec.weights[n] * xy[j][1],
                 self.colors[n],  # the behaviour's colour in every figure
                 1.5,
             )
             for j, n in enumerate(names)
-            if app[j] and n in dec.weights
+            if applicable[j] and n in dec.weights
         ]
         arrows.append(msg.Arrow(float(dec.fused[0]), float(dec.fused[1]), (1.0, 1.0, 1.0), 1.5))
         log.write("/lfd/overlay", t_ns, msg.arrow_scene(t_ns, "fusion", arrows))

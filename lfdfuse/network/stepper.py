@@ -186,14 +186,16 @@ class NetworkStepper:
         params = self.openings.params
         front_open = ahead_range(ranges, self.geometry, params) >= params.ahead_open_m
 
-        def sensed(sensor: OpeningSensor) -> Cues:
+        def sensed(sensor: OpeningSensor, lagged: tuple[tuple[float, Cues], ...] = ()) -> Cues:
             left, right = sensor.update(ranges, step_m, turn)
             ahead_open = sensor.ahead_m >= params.ahead_open_m
             beside = (sensor.tracker.inside[0], sensor.tracker.inside[1])
-            return Cues(left, right, step_m, turn, sensor.held_turn_rad, ahead_open, beside, front_open)
+            return Cues(
+                left, right, step_m, turn, sensor.held_turn_rad, ahead_open, beside, front_open, lagged
+            )
 
         lagged = tuple((s.params.lag_m, sensed(s)) for s in self.lagged)
-        return replace(sensed(self.openings), lagged=lagged)
+        return sensed(self.openings, lagged)
 
     def _ask(self, dec: Decision, t_ns: int) -> None:
         """Raise a :class:`HelpRequest` when a condition that needs help begins."""

@@ -7,6 +7,8 @@ is the numpy it must agree with, on the same inputs, to 1e-12.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -159,3 +161,66 @@ def test_the_sampler_skipping_finished_trials_gives_the_same_draws(
     ):
         assert np.array_equal(a, b)
     assert fast.iterations == whole.iterations
+
+
+@needs_numba
+@settings(max_examples=150, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(1, 40),
+    st.sampled_from([1, 2, 5, 6, 7, 8, 9, 13, 64, 128, 129, 384, 1000]),
+    st.sampled_from([0.1, 1.0, 30.0, 1000.0]),
+    st.integers(0, 4),
+    st.booleans(),
+)
+def test_compiled_logsumexp_is_scipys(
+    seed: int, rows: int, length: int, scale: float, special: int, keepdims: bool
+) -> None:
+    """Bit for bit, ties, infinities and NaN included (the sampler's path through it is chaotic:
+    one ulp there is another posterior draw)."""
+    from scipy.special import logsumexp
+
+    rng = np.random.default_rng(seed)
+    a = rng.normal(0.0, scale, (rows, length))
+    if special == 1:  # masked behaviours
+        a[rng.uniform(size=a.shape) < 0.3] = -np.inf
+    elif special == 2:
+        a[0] = -np.inf
+    elif special == 3:  # ties at the maximum
+        a[:, length // 2] = a[:, 0] = a.max()
+    elif special == 4:
+        a[rng.uniform(size=a.shape) < 0.05] = np.inf
+        a[rng.uniform(size=a.shape) < 0.02] = np.nan
+    with np.errstate(all="ignore"):
+        want = logsumexp(a, axis=-1, keepdims=keepdims)
+    got = kernels.logsumexp_last(a, keepdims=keepdims)
+    assert got.shape == want.shape and got.tobytes() == want.tobytes()
+    a3 = a.reshape(rows, 1, length)
+    assert (
+        kernels.logsumexp_last(a3, keepdims=True).tobytes() == logsumexp(a3, axis=2, keepdims=True).tobytes()
+    )
+
+
+@needs_numba
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(1, 5000), st.integers(1, 120))
+def test_compiled_log_marginal_skips_only_exact_zeros(seed: int, steps: int, particles: int) -> None:
+    """Nodes far below the peak add +0.0: the compiled loop skips their exp and gives the bits
+    of the loop that adds every node."""
+    rng = np.random.default_rng(seed)
+    m = model.FusionModel()
+    s = steps - np.abs(rng.normal(0.0, 0.2 * steps, particles))
+    s[rng.uniform(size=particles) < 0.05] = steps  # a perfect fit
+    got = kernels.LOG_MARGINAL(s, float(steps), m.kappas, m._log_norm)
+    want = np.empty(particles)
+    for p in range(particles):  # every node's exp, in order
+        terms = [
+            float(k) * (s[p] - steps) - steps * float(c) for k, c in zip(m.kappas, m._log_norm, strict=True)
+        ]
+        top = max(terms)
+        acc = 0.0
+        for x in terms:
+            acc += math.exp(x - top)
+        want[p] = top + math.log(acc) - math.log(len(terms))
+    assert got.tobytes() == want.tobytes()
+    np.testing.assert_allclose(got, model.log_marginal(s, steps, m), rtol=0.0, atol=1e-12)

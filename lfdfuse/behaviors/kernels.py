@@ -1,0 +1,290 @@
+"""Compiled loops of the per-scan sensing: the opening sensors and the laser primitives.
+
+A live run senses one scan per tick, and there numpy's per-call cost, not the arithmetic, is
+the time: a few dozen array operations on 181 beams each. These loops do a scan's work in one
+call. Each stands for a numpy function that stays the reference
+(:func:`~lfdfuse.behaviors.openings.side_openings_reference`,
+:func:`~lfdfuse.behaviors.openings.ahead_range_reference`, the primitives of
+:mod:`lfdfuse.behaviors.library`) and gives the same bits: comparisons and counts are exact,
+the beam bearings come in wrapped by numpy (no transcendental function of numba's own enters a
+result), and a sum over beams is numpy's own pairwise sum (:func:`_pairwise_dot`, operation for
+operation), so a scan computed alone, live, equals the same scan computed in a log.
+
+Every loop is a :func:`lfdfuse.jit.kernel`: nothing here imports numba.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from lfdfuse.jit import kernel
+
+#: numpy's pairwise summation: blocks of at most this many elements are summed with eight
+#: accumulators; longer runs are split in two (at a multiple of eight) and the halves added
+PW_BLOCK = 128
+
+
+def _side_open_loop(
+    r: np.ndarray,
+    a: np.ndarray,
+    far_m: float,
+    inner: float,
+    outer: float,
+    fraction: float,
+    out: np.ndarray,
+) -> None:
+    """``out (N, 2)``: an opening on the left / right of each scan ``r (N, B)``, bearings ``a``
+    ``(N, B)`` or ``(1, B)`` (wrapped); as :func:`~lfdfuse.behaviors.openings.side_openings_reference`."""
+    n, b = r.shape
+    shared = a.shape[0] == 1
+    for i in range(n):
+        ai = 0 if shared else i
+        for side in range(2):
+            sign = 1.0 if side == 0 else -1.0
+            count = 0
+            far = 0
+            for j in range(b):
+                x = sign * a[ai, j]
+                if x >= inner and x <= outer:
+                    count += 1
+                    v = r[i, j]
+                    if not np.isfinite(v) or v <= 0.0 or v >= far_m:
+                        far += 1
+            out[i, side] = count > 0 and far / count >= fraction
+
+
+def _ahead_loop(r: np.ndarray, a: np.ndarray, beam: float) -> float:
+    """The median range of the beams within ``beam`` of straight ahead (bearings ``a`` wrapped),
+    a beam with no return far; inf when no beam looks there. As
+    :func:`~lfdfuse.behaviors.openings.ahead_range_reference`."""
+    vals = np.empty(r.shape[0])
+    k = 0
+    for j in range(r.shape[0]):
+        if abs(a[j]) <= beam:
+            v = r[j]
+            vals[k] = v if np.isfinite(v) and v > 0.0 else np.inf
+            k += 1
+    if k == 0:
+        return np.inf
+    s = np.sort(vals[:k])
+    h = k // 2
+    return float(s[h]) if k % 2 else float((s[h - 1] + s[h]) / 2.0)
+
+
+def _corridor_loop(r: np.ndarray, left: np.ndarray, right: np.ndarray, open_m: float) -> bool:
+    """Walls abeam on both sides (beam indices ``left``, ``right``), their medians at most
+    ``open_m`` apart; as :meth:`~lfdfuse.behaviors.openings.OpeningSensor._in_corridor`."""
+    if left.shape[0] == 0 or right.shape[0] == 0:
+        return False
+    total = 0.0
+    for side in range(2):
+        idx = left if side == 0 else right
+        k = idx.shape[0]
+        vals = np.empty(k)
+        for m in range(k):
+            v = r[idx[m]]
+            vals[m] = v if np.isfinite(v) and v > 0.0 else np.inf
+        s = np.sort(vals)
+        h = k // 2
+        total += s[h] if k % 2 else (s[h - 1] + s[h]) / 2.0
+    return total <= open_m
+
+
+SIDE_OPEN = kernel(_side_open_loop)
+AHEAD = kernel(_ahead_loop)
+CORRIDOR = kernel(_corridor_loop)
+
+
+def pairwise_sum_reference(x: np.ndarray) -> float:
+    """numpy's pairwise sum of a contiguous 1-D float64 array, in Python (what
+    :func:`_pairwise_dot` reproduces; the tests hold both to ``np.add.reduce``)."""
+
+    def part(lo: int, n: int) -> float:
+        if n < 8:
+            res = 0.0
+            for i in range(n):
+                res += float(x[lo + i])
+            return res
+        if n <= PW_BLOCK:
+            acc = [float(x[lo + j]) for j in range(8)]
+            i = 8
+            while i < n - n % 8:
+                for j in range(8):
+                    acc[j] += float(x[lo + i + j])
+                i += 8
+            res = ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]))
+            while i < n:
+                res += float(x[lo + i])
+                i += 1
+            return res
+        n2 = n // 2
+        n2 -= n2 % 8
+        return part(lo, n2) + part(lo + n2, n - n2)
+
+    return 0.0 + part(0, len(x))
+
+
+#: the kinds of fused primitive a :func:`_pool_loop` op computes (``ops[m, 0]``)
+AVOID, WANDER, WALL_ATTRACT, WALL_SIDE, SONAR_AVOID = 0, 1, 2, 3, 4
+
+
+def _pool_loop(
+    r: np.ndarray,
+    own: np.ndarray,
+    max_range: float,
+    d: float,
+    sonar: np.ndarray,
+    sonar_lim: float,
+    thr: float,
+    ops: np.ndarray,
+    sectors: np.ndarray,
+    dirs: np.ndarray,
+    vec: np.ndarray,
+    app: np.ndarray,
+) -> None:
+    """The fused laser and sonar primitives of :func:`~lfdfuse.behaviors.primitives.compute`
+    over scans ``r (N, B)`` (and ``sonar (N, S)``): op ``m`` is ``(kind, sector, column)`` with
+    the directions ``dirs[m]`` it pools (``(B, 2)``; for the sonar the first ``S`` rows). Writes
+    ``vec[:, column]`` (zero where not applicable) and ``app[:, column]``, as the numpy
+    primitives (``Scan.near``, ``dot``, ``pool_strongest``) compute them, bit for bit."""
+    n, b = r.shape
+    n_s = sonar.shape[1]
+    size = max(b, n_s)
+    near = np.zeros(size, dtype=np.bool_)
+    rn = np.empty(size)
+    push = np.empty(size)
+    w = np.empty(size)
+    buf = np.empty(size)
+    stack_lo = np.empty(64, dtype=np.int64)
+    stack_n = np.empty(64, dtype=np.int64)
+    stack_st = np.empty(64, dtype=np.int64)
+    vals = np.empty(64)
+    s = np.empty(2)
+    for i in range(n):
+        for j in range(b):
+            x = r[i, j]
+            nr = np.isfinite(x) and x > 0.0 and x < max_range and own[j] and x < d
+            near[j] = nr
+            rn[j] = x if nr else d
+            push[j] = (d - rn[j]) / d if nr else 0.0
+        for m in range(ops.shape[0]):
+            kind = ops[m, 0]
+            sec = ops[m, 1]
+            col = ops[m, 2]
+            length = b
+            any_ = False
+            mag = 0.0
+            rmin = np.inf
+            if kind == AVOID:
+                for j in range(b):
+                    w[j] = push[j]
+                    any_ = any_ or near[j]
+                    mag = max(mag, push[j])
+            elif kind == WANDER:
+                cnt = 0
+                for j in range(b):
+                    o = (not near[j]) and sectors[sec, j]
+                    cnt += sectors[sec, j]
+                    w[j] = 1.0 if o else 0.0
+                    any_ = any_ or o
+            elif kind == WALL_ATTRACT or kind == WALL_SIDE:
+                for j in range(b):
+                    h = near[j] and sectors[sec, j]
+                    any_ = any_ or h
+                    if kind == WALL_ATTRACT:
+                        w[j] = 1.0 if h else 0.0
+                        if h:
+                            rmin = min(rmin, rn[j])
+                    else:
+                        w[j] = push[j] if h else 0.0
+                        mag = max(mag, w[j])
+            else:  # SONAR_AVOID
+                length = n_s
+                for j in range(n_s):
+                    x = sonar[i, j]
+                    ok = np.isfinite(x) and x > 0.0 and x < sonar_lim
+                    w[j] = (thr - x) / thr if ok else 0.0
+                    any_ = any_ or ok
+                    mag = max(mag, w[j])
+            app[i, col] = any_
+            if not any_:
+                vec[i, col, 0] = 0.0
+                vec[i, col, 1] = 0.0
+                continue
+            for c in range(2):
+                for j in range(length):
+                    buf[j] = w[j] * dirs[m, j, c]
+                # numpy's pairwise sum of buf[:length] (post-order over its split tree)
+                sp = 0
+                vp = 0
+                stack_lo[0] = 0
+                stack_n[0] = length
+                stack_st[0] = 0
+                sp = 1
+                while sp > 0:
+                    lo = stack_lo[sp - 1]
+                    cnt_ = stack_n[sp - 1]
+                    if cnt_ <= PW_BLOCK:
+                        sp -= 1
+                        if cnt_ < 8:
+                            res = 0.0
+                            for k in range(cnt_):
+                                res += buf[lo + k]
+                        else:
+                            a0 = buf[lo]
+                            a1 = buf[lo + 1]
+                            a2 = buf[lo + 2]
+                            a3 = buf[lo + 3]
+                            a4 = buf[lo + 4]
+                            a5 = buf[lo + 5]
+                            a6 = buf[lo + 6]
+                            a7 = buf[lo + 7]
+                            k = 8
+                            stop = cnt_ - cnt_ % 8
+                            while k < stop:
+                                a0 += buf[lo + k]
+                                a1 += buf[lo + k + 1]
+                                a2 += buf[lo + k + 2]
+                                a3 += buf[lo + k + 3]
+                                a4 += buf[lo + k + 4]
+                                a5 += buf[lo + k + 5]
+                                a6 += buf[lo + k + 6]
+                                a7 += buf[lo + k + 7]
+                                k += 8
+                            res = ((a0 + a1) + (a2 + a3)) + ((a4 + a5) + (a6 + a7))
+                            while k < cnt_:
+                                res += buf[lo + k]
+                                k += 1
+                        vals[vp] = res
+                        vp += 1
+                    elif stack_st[sp - 1] == 0:
+                        stack_st[sp - 1] = 1
+                        half = cnt_ // 2
+                        half -= half % 8
+                        stack_lo[sp] = lo + half
+                        stack_n[sp] = cnt_ - half
+                        stack_st[sp] = 0
+                        stack_lo[sp + 1] = lo
+                        stack_n[sp + 1] = half
+                        stack_st[sp + 1] = 0
+                        sp += 2
+                    else:
+                        sp -= 1
+                        vals[vp - 2] = vals[vp - 2] + vals[vp - 1]
+                        vp -= 1
+                s[c] = 0.0 + vals[0]
+            if kind == WANDER:
+                vec[i, col, 0] = s[0] / max(cnt, 1)
+                vec[i, col, 1] = s[1] / max(cnt, 1)
+                continue
+            norm = math.hypot(s[0], s[1])
+            if kind == WALL_ATTRACT:
+                mag = rmin / d if np.isfinite(rmin) else 0.0
+            scale = mag / norm if norm > 1e-12 else 0.0
+            vec[i, col, 0] = s[0] * scale
+            vec[i, col, 1] = s[1] * scale
+
+
+POOL = kernel(_pool_loop)
