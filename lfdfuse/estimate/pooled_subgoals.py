@@ -145,11 +145,14 @@ def pool_subgoals(
     and the rows they drive in pooled (see the module docstring)."""
     runs = [first, *(o.run for o in others)]
     al = align(runs)
-    if len(al.goals) != len(first.segments) or al.step_of[0] != tuple(range(len(first.segments))):
+    n = len(first.segments)
+    # a further demo's drive on past the first demo's last goal (a tour it did not make) is left out
+    if al.goals[:n] != tuple(s.goal for s in first.segments) or any(g is not None for g in al.goals[n:]):
         raise ConfigError(
             f"with --subgoals every demo's goals are the first demo's ({first_name}): pool demos of"
             " other goals without --subgoals"
         )
+    al = replace(al, step_of=tuple(tuple(k if k < n else -1 for k in m) for m in al.step_of))
     names = [first_name, *(o.name for o in others)]
     goal_steps = [s.index for s in first.segments if s.goal is not None]
     step_names = [s.name for s in table.network.steps]
