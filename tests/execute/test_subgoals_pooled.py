@@ -1,0 +1,41 @@
+"""Sub-goals learned from several demos: the ring-spur demo pooled with itself.
+
+The same demo twice (a copy under another name) finds the same decisions in both: every one is
+merged, the landmarks are the single demo's, and every row of every step is estimated again on
+twice the steps (``samples_added`` = the first demo's samples). The paper's estimate with 128
+particles (as tests/execute/test_correction_fixes.py), unchecked, keeps it to a few seconds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+from lfdfuse.estimate.paper import PFParams
+from lfdfuse.estimate.pipeline import EstimateOptions
+from lfdfuse.estimate.smc import SMCParams
+from lfdfuse.learn import LearnOptions, learn
+from lfdfuse.network.table import named_leaf_steps
+
+OPTS = EstimateOptions(seed=0, pf=replace(PFParams(), particles=128), smc=replace(SMCParams(), particles=128))
+
+
+def test_a_demo_pooled_with_itself_merges_every_decision_and_doubles_every_sub_step(
+    tmp_path: Path, ring_spur_demo: Path
+) -> None:
+    options = LearnOptions(OPTS, subgoals=True, check_starts=None)
+    one = learn([ring_spur_demo], options=options)
+    twin = tmp_path / "twin.seg.mcap"
+    twin.write_bytes(ring_spur_demo.read_bytes())
+    two = learn([ring_spur_demo, twin], options=options)
+    assert one.decisions and two.decisions == one.decisions
+    assert [v.kind for v in two.verdicts] == ["merged"] * len(one.decisions)
+    assert all(v.demos == (ring_spur_demo.name, "twin.seg.mcap") for v in two.verdicts)
+    a, b = named_leaf_steps(one.table), named_leaf_steps(two.table)
+    assert [(n, s.landmark) for n, s in a] == [(n, s.landmark) for n, s in b]  # the same sub-goals
+    for (name, s), (_, t) in zip(a, b, strict=True):
+        assert [r.bac for r in s.fusion] == [r.bac for r in t.fusion], name
+        for r, q in zip(s.fusion, t.fusion, strict=True):
+            assert q.samples == 2 * r.samples and q.samples_added == r.samples, (name, r.bac)
+            assert q.weights_before == r.weights
+    assert two.table.estimated_by["sources"] == [ring_spur_demo.name, "twin.seg.mcap"]
