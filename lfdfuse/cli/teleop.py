@@ -156,13 +156,15 @@ def teleop_cmd(
     (/lfd/step, /lfd/fused, help requests on /lfd/network). The run ends when the task is
     complete, or after --duration (default 300 s, as execute's --max-time). With --input script
     it is tick for tick the `execute` run of the same table, --seed and --start until the
-    first input.
+    first input. With --demo (the table's demos), the estimate with the correction follows the
+    session and lists per step what it adds or re-weights (--estimate-to writes that table).
 
     Examples:
       lfdfuse teleop --world building -o mine.mcap
       lfdfuse teleop --input foxglove --port 8765 --duration 600 -o mine.mcap
       lfdfuse teleop --input script --script drive.yaml -o scripted.mcap
       lfdfuse teleop --table t.yaml --input script --script fix.yaml -o fix.mcap
+      lfdfuse teleop --table t.yaml --demo demo.seg.mcap --estimate-to fixed.yaml -o fix.mcap
     """
     if (input_ is InputKind.SCRIPT) != (script is not None):
         raise ConfigError("--script FILE goes with --input script (and only with it)")
