@@ -39,3 +39,45 @@ def test_a_demo_pooled_with_itself_merges_every_decision_and_doubles_every_sub_s
             assert q.samples == 2 * r.samples and q.samples_added == r.samples, (name, r.bac)
             assert q.weights_before == r.weights
     assert two.table.estimated_by["sources"] == [ring_spur_demo.name, "twin.seg.mcap"]
+
+
+def test_a_corrections_turn_off_becomes_a_decision_of_a_table_without_one(
+    tmp_path: Path, ring_spur_demo: Path
+) -> None:
+    """The demo read as a correction of its own paper table (no sub-goals): every turn-off the
+    sub-goal refinement finds in it is added to its goal step — drive on with the step's own
+    rows, turn with the demo's turn alone, then the step's own rows again — each landmark as
+    the refinement writes it."""
+    from lfdfuse.estimate.pooled_subgoals import FurtherDemo, pool_subgoals
+    from lfdfuse.estimate.subgoals import track_of
+    from lfdfuse.segment.read import read_segmented_and_run
+
+    run, raw = read_segmented_and_run(ring_spur_demo)
+    track = track_of(raw, run)
+    paper = learn([ring_spur_demo], options=LearnOptions(OPTS)).table
+    refined = learn([ring_spur_demo], options=LearnOptions(OPTS, subgoals=True, check_starts=None))
+    res = pool_subgoals(
+        first=run,
+        first_name="demo",
+        paper=paper,
+        table=paper,
+        decisions=(),
+        others=[FurtherDemo("fix", run, track, correction=True)],
+        opts=OPTS,
+    )
+    assert [(v.kind, v.decision) for v in res.verdicts] == [("added", d) for d in refined.decisions]
+    assert res.decisions == ()  # none of the first demo's own
+    marks = [(n, s.landmark) for n, s in named_leaf_steps(res.table)]
+    assert marks == [(n, s.landmark) for n, s in named_leaf_steps(refined.table)]
+    plain = {s.name: s for s in paper.network.steps}
+    for step in res.table.network.steps:
+        if step.network is None:
+            continue
+        *drive, turn, rest = step.network.steps
+        base = plain[step.name]
+        assert rest.name == base.name and [r.bac for r in rest.fusion] == [r.bac for r in base.fusion]
+        assert all(r.samples_added for r in turn.fusion) and all(
+            r.weights_before is None for r in turn.fusion
+        )
+        for leaf in (*drive, rest):  # the step's own rows, with the "person's" steps there added
+            assert {r.bac for r in base.fusion} <= {r.bac for r in leaf.fusion}
