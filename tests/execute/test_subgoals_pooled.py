@@ -11,23 +11,32 @@ from __future__ import annotations
 from dataclasses import replace
 from pathlib import Path
 
+import pytest
+
 from lfdfuse.estimate.paper import PFParams
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.estimate.smc import SMCParams
-from lfdfuse.learn import LearnOptions, learn
+from lfdfuse.learn import LearnOptions, LearnResult, learn
 from lfdfuse.network.table import named_leaf_steps
 
 OPTS = EstimateOptions(seed=0, pf=replace(PFParams(), particles=128), smc=replace(SMCParams(), particles=128))
+#: sub-goals learned from one demo, unchecked
+ALONE = LearnOptions(OPTS, subgoals=True, check_starts=None)
+
+
+@pytest.fixture(scope="module")
+def refined(ring_spur_demo: Path) -> LearnResult:
+    """The ring-spur demo learned alone with sub-goals (both tests compare with it)."""
+    return learn([ring_spur_demo], options=ALONE)
 
 
 def test_a_demo_pooled_with_itself_merges_every_decision_and_doubles_every_sub_step(
-    tmp_path: Path, ring_spur_demo: Path
+    tmp_path: Path, ring_spur_demo: Path, refined: LearnResult
 ) -> None:
-    options = LearnOptions(OPTS, subgoals=True, check_starts=None)
-    one = learn([ring_spur_demo], options=options)
+    one = refined
     twin = tmp_path / "twin.seg.mcap"
     twin.write_bytes(ring_spur_demo.read_bytes())
-    two = learn([ring_spur_demo, twin], options=options)
+    two = learn([ring_spur_demo, twin], options=ALONE)
     assert one.decisions and two.decisions == one.decisions
     assert [v.kind for v in two.verdicts] == ["merged"] * len(one.decisions)
     assert all(v.demos == (ring_spur_demo.name, "twin.seg.mcap") for v in two.verdicts)
@@ -42,7 +51,7 @@ def test_a_demo_pooled_with_itself_merges_every_decision_and_doubles_every_sub_s
 
 
 def test_a_corrections_turn_off_becomes_a_decision_of_a_table_without_one(
-    tmp_path: Path, ring_spur_demo: Path
+    ring_spur_demo: Path, refined: LearnResult
 ) -> None:
     """The demo read as a correction of its own paper table (no sub-goals): every turn-off the
     sub-goal refinement finds in it is added to its goal step — drive on with the step's own
@@ -55,7 +64,6 @@ def test_a_corrections_turn_off_becomes_a_decision_of_a_table_without_one(
     run, raw = read_segmented_and_run(ring_spur_demo)
     track = track_of(raw, run)
     paper = learn([ring_spur_demo], options=LearnOptions(OPTS)).table
-    refined = learn([ring_spur_demo], options=LearnOptions(OPTS, subgoals=True, check_starts=None))
     res = pool_subgoals(
         first=run,
         first_name="demo",
