@@ -63,7 +63,7 @@ class TaughtAgain:
 
     def row(self) -> dict[str, Any]:
         return {
-            "seed": self.seed,
+            "name": f"offroute-{self.seed}",
             "teacher": "completed" if self.demo_completed else "failed",
             "before": "".join("✓" if ok else "✗" for ok in self.before),
             "failing_start": self.failing,
