@@ -17,18 +17,21 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from lfdfuse.errors import ConfigError
+from lfdfuse.estimate.demo_alignment import same_behaviors
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run, estimate_runs
+from lfdfuse.estimate.pooled_subgoals import FurtherDemo, Verdict, pool_subgoals
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.check import CHECK_STARTS, DemoWorld, demo_world
 from lfdfuse.execute.repair import Amends, Repair, repair
 from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.log.reader import Run
-from lfdfuse.network.table import FusionTable
-from lfdfuse.progress import Progress, part
+from lfdfuse.network.changes import step_changes
+from lfdfuse.network.table import FusionTable, leaf_steps
+from lfdfuse.progress import Progress, part, tell
 from lfdfuse.robot.pose import Pose
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
 from lfdfuse.segment.pipeline import segment_file
@@ -37,6 +40,9 @@ from lfdfuse.segment.track import LandmarkTrack
 from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import Leg
 from lfdfuse.world.model import World
+
+#: a segmented correction log (``teleop --table``) says how many ticks its network drove
+CORRECTION_KEY = "segment_network_ticks"
 
 
 @dataclass(frozen=True)
@@ -62,6 +68,8 @@ class LearnResult:
     decisions: tuple[DecisionPoint, ...] = ()  # subgoals: the decision points found
     sources: tuple[str, ...] = ()  # the demos, by name
     repair: Repair | None = None  # subgoals checked in the demo's world: what the check did
+    #: subgoals over several demos: what became of each decision (kept, merged, dropped, added)
+    verdicts: tuple[Verdict, ...] = ()
 
 
 def learn_run(
@@ -89,13 +97,25 @@ def learn_run(
     fixed: Repair | None = None
     if options.subgoals and track is not None:
         then = part(progress, start=share, size=1.0 - share, total=1.0)
-        if home is not None and options.check_starts is not None:
-            fixed = subgoals_checked(table, run, track, home, options, progress=then)
-            table, decisions = fixed.table, fixed.decisions
-        else:
-            res = refine(table, run, track, opts=options.estimate, params=options.decisions, progress=then)
-            table, decisions = res.table, res.decisions
+        table, decisions, fixed = _with_subgoals(table, run, track, home, options, then)
     return LearnResult(table, groups, skipped, decisions, (name,), fixed)
+
+
+def _with_subgoals(
+    table: FusionTable,
+    run: SegmentedRun,
+    track: LandmarkTrack,
+    home: DemoWorld | None,
+    options: LearnOptions,
+    progress: Progress | None,
+) -> tuple[FusionTable, tuple[DecisionPoint, ...], Repair | None]:
+    """``table`` (the paper's of ``run``) refined at the run's decision points, checked in its
+    world ``home`` when it has one; with the decisions kept and what the check did."""
+    if home is not None and options.check_starts is not None:
+        fixed = subgoals_checked(table, run, track, home, options, progress=progress)
+        return fixed.table, fixed.decisions, fixed
+    res = refine(table, run, track, opts=options.estimate, params=options.decisions, progress=progress)
+    return res.table, res.decisions, None
 
 
 def home_of(raw: Run, run: SegmentedRun) -> DemoWorld | None:
@@ -168,19 +188,84 @@ def learn(
         else:
             run = read_segmented(src)
         return learn_run(run, options=options, track=track, name=name, progress=progress, home=home)
-    if options.subgoals:
-        raise ConfigError(
-            "sub-goals are learned from one demonstration for now: drop --subgoals to pool demos"
-        )
     where = [Path(d).resolve() for d in demos]
     if len(set(where)) != len(where):
         raise ConfigError("the same demonstration is given twice: its evidence would count double")
     names = [Path(d).name for d in demos]
     if len(set(names)) != len(names):
         names = [str(d) for d in demos]
+    if options.subgoals:
+        return _learn_subgoals_pooled(demos, names, options, progress)
     runs = [read_segmented(d) for d in demos]
     table, groups, skipped = estimate_runs(runs, opts=options.estimate, names=names, progress=progress)
     return LearnResult(table, groups, skipped, (), tuple(names))
+
+
+def _learn_subgoals_pooled(
+    demos: Sequence[str | Path], names: Sequence[str], options: LearnOptions, progress: Progress | None
+) -> LearnResult:
+    """Sub-goals from several demos (:mod:`lfdfuse.estimate.pooled_subgoals`): the first demo
+    learned (and checked) as alone, the others' decisions matched to its, their rows pooled."""
+    read = [read_segmented_and_run(d) for d in demos]
+    runs = [run for run, _ in read]
+    why = same_behaviors(runs, names)
+    if why is not None:
+        raise ConfigError(why)
+    run, raw = read[0]
+    if CORRECTION_KEY in run.metadata:
+        raise ConfigError(
+            f"{names[0]} is a correction (teleop --table): with --subgoals give the teacher's demo first"
+        )
+    track = track_of(raw, run, source=str(demos[0]))
+    first = part(progress, start=0.0, size=0.4, total=1.0)
+    paper, groups, skipped = estimate_run(run, opts=options.estimate, name=names[0], progress=first)
+    then = part(progress, start=0.4, size=0.4, total=1.0)
+    table, decisions, fixed = _with_subgoals(paper, run, track, home_of(raw, run), options, then)
+    others = [
+        FurtherDemo(name, r, track_of(w, r, source=str(src)), CORRECTION_KEY in r.metadata)
+        for name, src, (r, w) in zip(names[1:], demos[1:], read[1:], strict=True)
+    ]
+    res = pool_subgoals(
+        first=run,
+        first_name=names[0],
+        paper=paper,
+        table=table,
+        decisions=decisions,
+        others=others,
+        opts=options.estimate,
+        params=options.decisions,
+    )
+    tell(progress, 1.0, 1.0)
+    return LearnResult(res.table, groups, skipped, res.decisions, tuple(names), fixed, res.verdicts)
+
+
+@dataclass(frozen=True)
+class Lesson:
+    """What a correction teaches: the table estimated again with it, and in words what changed."""
+
+    table: FusionTable
+    changes: tuple[str, ...]  # one line per goal step added, re-structured or re-weighted
+    verdicts: tuple[Verdict, ...]  # with sub-goals: what became of each decision
+    segmented: Path  # the correction, segmented with the table's behaviours
+
+
+def correction_lesson(
+    table: FusionTable,
+    *,
+    demos: Sequence[str | Path],
+    correction: str | Path,
+    folder: Path,
+    options: LearnOptions = LearnOptions(),
+    progress: Progress | None = None,
+) -> Lesson:
+    """``table`` (learned from ``demos``) estimated again with the ``correction`` log recorded
+    against it (``teleop --table``): the log is segmented into ``folder`` with the table's
+    behaviours, and learned with the demos — with sub-goals when the table has landmark steps."""
+    seg = folder / f"{Path(correction).name.removesuffix('.mcap')}.seg.mcap"
+    segment_file(correction, out=seg, behaviors=",".join(table.behaviors))
+    subgoals = any(s.landmark is not None for s in leaf_steps(table))
+    res = learn([*demos, seg], options=replace(options, subgoals=subgoals), progress=progress)
+    return Lesson(res.table, tuple(step_changes(table, res.table)), res.verdicts, seg)
 
 
 # ------------------------------------------------------------------------------ demonstrate

@@ -60,7 +60,9 @@ def estimate_cmd(
     subgoals: bool = typer.Option(
         False,
         "--subgoals",
-        help="Turn-offs the teacher took into an opening (a spur, a room) become landmark sub-goal steps.",
+        help="Turn-offs the teacher took into an opening (a spur, a room) become landmark sub-goal steps;"
+        " with several demos, decisions are matched across them (a correction's turn into an opening the"
+        " network passed by becomes one).",
     ),
     commands: CommandChoice = typer.Option(
         CommandChoice.AUTO,
@@ -80,6 +82,7 @@ def estimate_cmd(
       lfdfuse estimate demo.seg.mcap --method nnls -o nnls.yaml
       lfdfuse estimate a.seg.mcap b.seg.mcap c.seg.mcap -o pooled.yaml
       lfdfuse estimate demo.seg.mcap correction.seg.mcap -o corrected.yaml
+      lfdfuse estimate demo.seg.mcap correction.seg.mcap --subgoals -o corrected.yaml
     """
     check_outputs([out], list(srcs))
     pf = replace(PFParams(), particles=particles, likelihood=likelihood.literal)
@@ -103,3 +106,7 @@ def estimate_cmd(
     if res.repair is not None:
         for line in res.repair.describe():
             console.print(line, markup=False)
+    if res.verdicts:
+        console.print(f"decisions over {len(res.sources)} demos:")
+        for v in res.verdicts:
+            console.print(f"  {v.describe()}", markup=False, soft_wrap=True)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 import select
 import sys
+import tempfile
 import termios
 from collections import deque
 from collections.abc import Iterator
@@ -33,16 +34,19 @@ from lfdfuse.cli.common import (
     duration_option,
     existing,
     finite,
+    progress_bar,
     seed_option,
     start_option,
     user_errors,
 )
 from lfdfuse.cli.render import print_report, print_run
 from lfdfuse.errors import ConfigError
+from lfdfuse.estimate.methods import EstimateOptions
 from lfdfuse.execute.correct import correct, correction_driver
 from lfdfuse.execute.report import write_report
+from lfdfuse.learn import LearnOptions, correction_lesson
 from lfdfuse.network.stepper import NetworkStepper
-from lfdfuse.network.table import load_table
+from lfdfuse.network.table import FusionTable, load_table, write_table
 from lfdfuse.robot.pose import Pose
 from lfdfuse.robot.readings import ScanGeometry
 from lfdfuse.sources.teleop.clock import SimClock
@@ -123,6 +127,15 @@ def teleop_cmd(
     report: Path | None = typer.Option(
         None, "--report", help="With --table: write execute's JSON report of the network's task here."
     ),
+    demos: list[Path] = typer.Option(
+        [],
+        "--demo",
+        help="With --table: a segmented demo the table was learned from (repeat for several); after the"
+        " run, the estimate with the correction is made and each step it adds or re-weights is listed.",
+    ),
+    estimate_to: Path | None = typer.Option(
+        None, "--estimate-to", help="With --demo: write that estimate (the corrected table) here."
+    ),
 ) -> None:
     """Drive the simulated robot yourself and record the run as a demonstration.
 
@@ -143,19 +156,23 @@ def teleop_cmd(
     (/lfd/step, /lfd/fused, help requests on /lfd/network). The run ends when the task is
     complete, or after --duration (default 300 s, as execute's --max-time). With --input script
     it is tick for tick the `execute` run of the same table, --seed and --start until the
-    first input.
+    first input. With --demo (the table's demos), the estimate with the correction follows the
+    session and lists per step what it adds or re-weights (--estimate-to writes that table).
 
     Examples:
       lfdfuse teleop --world building -o mine.mcap
       lfdfuse teleop --input foxglove --port 8765 --duration 600 -o mine.mcap
       lfdfuse teleop --input script --script drive.yaml -o scripted.mcap
       lfdfuse teleop --table t.yaml --input script --script fix.yaml -o fix.mcap
+      lfdfuse teleop --table t.yaml --demo demo.seg.mcap --estimate-to fixed.yaml -o fix.mcap
     """
     if (input_ is InputKind.SCRIPT) != (script is not None):
         raise ConfigError("--script FILE goes with --input script (and only with it)")
-    if table is None and (handback is not None or report is not None):
-        raise ConfigError("--handback and --report go with --table (a network to correct)")
-    check_outputs([out, report], [table, script, existing(world)])
+    if table is None and (handback is not None or report is not None or demos):
+        raise ConfigError("--handback, --report and --demo go with --table (a network to correct)")
+    if estimate_to is not None and not demos:
+        raise ConfigError("--estimate-to needs the demos the table was learned from (--demo)")
+    check_outputs([out, report, estimate_to], [table, script, existing(world), *demos])
     w = load_world(world)
     tab = load_table(table) if table is not None else None
     if tab is not None and duration is None:
@@ -243,7 +260,36 @@ def teleop_cmd(
         print_report(result.report, out=str(out))
         if report is not None:
             write_report(result.report, report)
+        if demos and tab is not None:
+            _lesson(tab, demos, out, estimate_to, seed)
+        elif result.report["correction"]["person_ticks"]:
+            console.print(
+                "  (give --demo DEMO.seg.mcap, the table's demos, to see what this correction changes)"
+            )
     console.print(f"next: lfdfuse segment {out}")
+
+
+def _lesson(table: FusionTable, demos: list[Path], out: Path, estimate_to: Path | None, seed: int) -> None:
+    """Estimate the table again with the correction just recorded; say what changed per step."""
+    with tempfile.TemporaryDirectory() as tmp, progress_bar("estimate with the correction") as update:
+        lesson = correction_lesson(
+            table,
+            demos=demos,
+            correction=out,
+            folder=Path(tmp),
+            options=LearnOptions(EstimateOptions(seed=seed)),
+            progress=update,
+        )
+    what = (
+        f"written to {estimate_to}" if estimate_to is not None else "a dry run: --estimate-to FILE writes it"
+    )
+    console.print(f"estimated with {counted(len(demos), 'demo')} and this correction ({what}):")
+    for line in lesson.changes or ("no step changes: the person drove nowhere the network learns from",):
+        console.print(f"  {line}", markup=False, soft_wrap=True)
+    for v in lesson.verdicts:
+        console.print(f"  {v.describe()}", markup=False, soft_wrap=True)
+    if estimate_to is not None:
+        write_table(lesson.table, estimate_to)
 
 
 def layout_path() -> Path:

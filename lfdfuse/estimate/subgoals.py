@@ -120,41 +120,47 @@ def refine(
         parts = [sub_steps[s.index] for orig, s in new if orig == seg.index]
         inner: list[Step] = []
         for k, d in enumerate(mine):
-            drive, turn = parts[2 * k], parts[2 * k + 1]
             tag = f"-{k + 1}" if len(mine) > 1 else ""
-            if not d.at_start:
-                inner.append(
-                    replace(
-                        drive,
-                        name=f"to-{d.side}-opening-{d.nth}{tag}",
-                        goal=None,
-                        landmark=Landmark(
-                            "opening",
-                            d.side,
-                            d.nth,
-                            d.odometry_m,
-                            count=OpeningCount.PASSED if d.cue == OpeningCue.PASSED else OpeningCount.ALL,
-                            within_m=d.within_m,
-                            ahead=None
-                            if d.ahead_open is None
-                            else (Ahead.OPEN if d.ahead_open else Ahead.CLOSED),
-                            lag_m=d.lag_m,
-                        ),
-                    )
-                )
-            inner.append(
-                replace(
-                    turn,
-                    name=f"turn-{d.side}{tag}",
-                    goal=None,
-                    landmark=Landmark("turned", d.side, angle_rad=d.angle_rad, lag_m=d.lag_m),
-                )
-            )
+            inner += decision_steps(d, parts[2 * k], parts[2 * k + 1], tag)
         old = steps[seg.index]
         # after the last turn: the rows of what followed it, or (``rest``) the goal step's own
         inner.append(old if seg.index in rest else replace(parts[-1], name=old.name))
         steps[seg.index] = Step(old.name, old.goal, (), Network(old.name, tuple(inner)))
     return SubgoalResult(replace(table, network=replace(table.network, steps=tuple(steps))), tuple(kept))
+
+
+def decision_steps(d: DecisionPoint, drive: Step, turn: Step, tag: str = "") -> list[Step]:
+    """The landmark steps of decision ``d``: drive on to its opening with ``drive``'s rows (none
+    for a turn from the sub-segment's start), then turn into it with ``turn``'s; ``tag`` tells
+    several decisions of one goal step apart."""
+    out: list[Step] = []
+    if not d.at_start:
+        out.append(
+            replace(
+                drive,
+                name=f"to-{d.side}-opening-{d.nth}{tag}",
+                goal=None,
+                landmark=Landmark(
+                    "opening",
+                    d.side,
+                    d.nth,
+                    d.odometry_m,
+                    count=OpeningCount.PASSED if d.cue == OpeningCue.PASSED else OpeningCount.ALL,
+                    within_m=d.within_m,
+                    ahead=None if d.ahead_open is None else (Ahead.OPEN if d.ahead_open else Ahead.CLOSED),
+                    lag_m=d.lag_m,
+                ),
+            )
+        )
+    out.append(
+        replace(
+            turn,
+            name=f"turn-{d.side}{tag}",
+            goal=None,
+            landmark=Landmark("turned", d.side, angle_rad=d.angle_rad, lag_m=d.lag_m),
+        )
+    )
+    return out
 
 
 def _approached(

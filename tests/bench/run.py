@@ -29,6 +29,7 @@ SUITES = {
     "estimate": "tests.bench.estimate",
     "offroute": "tests.bench.offroute",
     "generated": "tests.bench.generated",
+    "corrections": "tests.bench.corrections",
     "memory": "tests.bench.memory",
     "drive": "tests.bench.drive",
     "keys": "tests.bench.keys",

@@ -312,7 +312,8 @@ def test_teleop_table_from_the_command_line(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("extra", "needle"),
     [
-        (["--handback", "2"], "--handback and --report go with --table"),
+        (["--handback", "2"], "--handback, --report and --demo go with --table"),
+        (["--table", str(CORRIDOR_TABLE), "--estimate-to", "x.yaml"], "--estimate-to needs the demos"),
         (["--table", "missing.yaml"], "missing.yaml"),
     ],
 )
@@ -367,3 +368,34 @@ def test_a_collision_while_the_person_drives_is_the_persons_not_the_networks(tmp
     assert c["takeovers"] == 1 and c["person_collisions"] >= 1, c
     assert result.report["collisions"] + c["person_collisions"] == result.teleop.run.collisions
     assert result.report["collisions"] == result.teleop.run.collisions - c["person_collisions"]
+
+
+def test_teleop_table_with_its_demo_says_what_the_correction_changes(tmp_path: Path) -> None:
+    """After the session, the estimate with the demo and the correction: one line per step it
+    re-weights, and (--estimate-to) the table itself, the same as `estimate demo fix` gives."""
+    from lfdfuse.learn import demonstrate, learn
+    from lfdfuse.segment.pipeline import segment_file
+    from lfdfuse.world.model import load_world
+    from tests.sources.teleop.correction import CORRECTION_SCRIPT
+
+    truth = load_table(CORRIDOR_TABLE)
+    demo = demonstrate(
+        truth, world=load_world("corridor"), folder=tmp_path, name="d", duration_s=14.0, seed=1
+    )
+    script = tmp_path / "fix.yaml"
+    script.write_text("".join(f"- {json.dumps(e)}\n" for e in CORRECTION_SCRIPT))
+    out, fixed = tmp_path / "fix.mcap", tmp_path / "fixed.yaml"
+    args = ["teleop", "--table", str(CORRIDOR_TABLE), "--world", "corridor", "--input", "script"]
+    res = runner.invoke(
+        app,
+        [*args, "--script", str(script), "--duration", "14", "-o", str(out), "--demo", str(demo.segmented)]
+        + ["--estimate-to", str(fixed)],
+    )
+    assert res.exit_code == 0, res.output
+    assert f"estimated with 1 demo and this correction (written to {fixed})" in res.output
+    step = truth.network.steps[0].name
+    line = next(ln.strip() for ln in res.output.splitlines() if ln.strip().startswith(f"{step}: re-weights"))
+    assert int(line.split()[2]) >= 1, line  # the rows the person drove in
+    seg = tmp_path / "fix.seg.mcap"
+    segment_file(out, out=seg, behaviors=",".join(truth.behaviors))
+    assert fixed.read_text() == dump_table(learn([demo.segmented, seg]).table)

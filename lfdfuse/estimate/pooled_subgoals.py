@@ -1,0 +1,393 @@
+"""Sub-goals from several demos: decision points matched across demos, sub-step rows pooled.
+
+The first demo's table with sub-goals (:func:`lfdfuse.estimate.subgoals.refine`, checked in its
+world where it has one) is where this starts; every further demo is a teacher's demo or a
+person's correction (a ``teleop --table`` log: only the person's ticks are informative).
+
+* **Decisions** are found per demo (:func:`~lfdfuse.segment.decisions.find_decisions`, the first
+  demo's paper table replayed on its steps) and **matched** to the first demo's by goal step and
+  landmark (:func:`same_place`: the side, the opening's shape, the distance driven within a
+  tolerance, the turn). A match is *merged*: the landmark stays the first demo's and the
+  sub-steps' rows pool over both demos. A decision one teacher took and another teacher passed
+  by while reaching the goal some other way was no choice the task needs: *dropped* (the goal
+  step loses its sub-goals, the paper's step again).
+* **A correction ends in a decision**: where the person took over and turned into an opening the
+  network passed by, the turn is a decision of the goal step the network was in, with its
+  landmark from the correction's own ticks and sensors — *added* to that step (a step whose
+  sub-goals led elsewhere has them *replaced* by the person's). A correction's decision that
+  matches one of the table's was missed by the network from the correction's start: it is
+  merged and recognised by distance (the first opening on its side past a window that holds
+  both demos' places) instead of by count.
+* **Rows**: every leaf step keeps its rows; a row another demo adds informative steps to is
+  estimated again on the pooled steps (the product over the demos, as
+  :mod:`lfdfuse.estimate.pooled_estimate` does) on its own random stream, so a row nobody
+  corrected is bit-identical. A new turn step's rows are the person's turn alone.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from lfdfuse.errors import ConfigError
+from lfdfuse.estimate.baselines import angle_errors
+from lfdfuse.estimate.commands import Commands, commands_of
+from lfdfuse.estimate.demo_alignment import align, problem_of, row_rng
+from lfdfuse.estimate.methods import EstimateOptions, estimate_groups
+from lfdfuse.estimate.replay import fused_vectors
+from lfdfuse.estimate.subgoals import decision_steps
+from lfdfuse.network.landmark_goals import Landmark, OpeningCount
+from lfdfuse.network.table import FusionRow, FusionTable, Network, Step
+from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, find_decisions, split_segments
+from lfdfuse.segment.read import SegmentedRun
+from lfdfuse.segment.track import LandmarkTrack
+
+#: a row of a sub-step pooled over demos draws from ``row_rng(seed, SUBSTEP, leaf, bac)``
+SUBSTEP = 2
+#: two decisions are one place when their distances from the sub-segment's start differ by at
+#: most this share of the first's, or by ``MATCH_MIN_M`` ...
+MATCH_SHARE = 0.3
+MATCH_MIN_M = 1.5
+#: ... and their turns by at most this
+MATCH_TURN_RAD = math.radians(45.0)
+
+
+@dataclass(frozen=True)
+class FurtherDemo:
+    """A demo after the first: its segmented run, its landmark track, and whether it is a
+    person's correction of a network (its network's ticks non-informative)."""
+
+    name: str
+    run: SegmentedRun
+    track: LandmarkTrack
+    correction: bool
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """What became of one decision: ``kept``, ``merged``, ``dropped``, ``added`` or ``replaced``."""
+
+    kind: str
+    step: str  # the goal step's name
+    decision: DecisionPoint
+    demos: tuple[str, ...]  # the demos that took it
+    why: str
+
+    def describe(self) -> str:
+        d = self.decision
+        where = "from the step's start" if d.at_start else f"at opening {d.nth}, {d.odometry_m:.1f} m"
+        turn = f"turn {math.degrees(d.angle_rad):.0f}° {d.side} {where}"
+        return f"{self.kind:8} {self.step}: {turn} ({', '.join(self.demos)}): {self.why}"
+
+
+@dataclass(frozen=True)
+class PooledSubgoals:
+    table: FusionTable
+    verdicts: tuple[Verdict, ...]
+    decisions: tuple[DecisionPoint, ...]  # the first demo's decisions the table keeps
+
+
+def same_place(a: DecisionPoint, b: DecisionPoint) -> bool:
+    """Whether decisions ``a`` and ``b`` (of one goal step, in two demos) are the same turn-off:
+    the same side and shape, the distance driven within a tolerance, a similar turn."""
+    if a.side != b.side or a.at_start != b.at_start:
+        return False
+    if a.ahead_open is not None and b.ahead_open is not None and a.ahead_open != b.ahead_open:
+        return False
+    tol = max(MATCH_MIN_M, MATCH_SHARE * a.odometry_m, a.within_m or 0.0)
+    return abs(a.odometry_m - b.odometry_m) <= tol and abs(a.angle_rad - b.angle_rad) <= MATCH_TURN_RAD
+
+
+@dataclass
+class _Slot:
+    """One decision of a goal step's final sub-goals: the decision as the table writes it, the
+    demo it comes from, and each demo's own decision there (for splitting its steps)."""
+
+    decision: DecisionPoint
+    source: int
+    seen: dict[int, DecisionPoint] = field(default_factory=dict)
+    by_distance: float | None = None  # merged from a correction: the window of a distance landmark
+
+
+def decisions_of(
+    demo: FurtherDemo, paper: FusionTable, step_of: Sequence[int], params: DecisionParams
+) -> list[DecisionPoint]:
+    """Decision points of a further demo, the first demo's paper table replayed on its steps."""
+    run = demo.run
+    mapped = replace(run, segment_of=np.asarray(step_of, dtype=np.int64)[run.segment_of])
+    fused = fused_vectors(paper, mapped, np.arange(len(run.t_ns)))
+    return find_decisions(
+        segments=run.segments,
+        demo=run.demo,
+        informative=run.informative,
+        fused=fused,
+        track=demo.track,
+        params=params,
+    )
+
+
+def pool_subgoals(
+    *,
+    first: SegmentedRun,
+    first_name: str,
+    paper: FusionTable,
+    table: FusionTable,
+    decisions: Sequence[DecisionPoint],
+    others: Sequence[FurtherDemo],
+    opts: EstimateOptions,
+    params: DecisionParams = DecisionParams(),
+) -> PooledSubgoals:
+    """``table`` (the first demo's with sub-goals, ``decisions`` its decision points; ``paper``
+    the first demo's table without) with the further demos' decisions matched, added or dropped
+    and the rows they drive in pooled (see the module docstring)."""
+    runs = [first, *(o.run for o in others)]
+    al = align(runs)
+    n = len(first.segments)
+    # a further demo's drive on past the first demo's last goal (a tour it did not make) is left out
+    if al.goals[:n] != tuple(s.goal for s in first.segments) or any(g is not None for g in al.goals[n:]):
+        raise ConfigError(
+            f"with --subgoals every demo's goals are the first demo's ({first_name}): pool demos of"
+            " other goals without --subgoals"
+        )
+    al = replace(al, step_of=tuple(tuple(k if k < n else -1 for k in m) for m in al.step_of))
+    names = [first_name, *(o.name for o in others)]
+    goal_steps = [s.index for s in first.segments if s.goal is not None]
+    step_names = [s.name for s in table.network.steps]
+    slots: dict[int, list[_Slot]] = {j: [] for j in range(len(first.segments))}
+    for d in decisions:
+        slots[d.segment].append(_Slot(d, 0, {0: d}))
+    verdicts: list[Verdict] = []
+    dropped: set[int] = set()  # goal steps back to the paper's step
+    replaced: dict[int, int] = {}  # goal step -> the correction whose decisions it takes
+    for e, demo in enumerate(others, start=1):
+        found = decisions_of(demo, paper, al.step_of[e], params)
+        for j in goal_steps:
+            mine = [d for d in found if al.step_of[e][d.segment] == j]
+            segs = [s for s, k in zip(demo.run.segments, al.step_of[e], strict=True) if k == j]
+            reached = any(s.goal == first.segments[j].goal for s in segs)
+            have = slots[j]
+            used: set[int] = set()
+            unmatched: list[DecisionPoint] = []
+            for b in mine:
+                k = next((k for k, s in enumerate(have) if k not in used and same_place(s.decision, b)), None)
+                if k is None:
+                    unmatched.append(b)
+                    continue
+                used.add(k)
+                have[k].seen[e] = b
+                if demo.correction:
+                    a = have[k].decision
+                    have[k].by_distance = max(
+                        have[k].by_distance or 0.0,
+                        a.within_m or 0.0,
+                        abs(a.odometry_m - b.odometry_m) + params.within_min_m,
+                    )
+            if demo.correction:
+                if unmatched:
+                    replaced[j] = e
+                    slots[j] = [_Slot(b, e, {e: b}) for b in mine]
+                continue
+            if reached and (unmatched or len(used) < len(have)):
+                dropped.add(j)
+                for b in unmatched:
+                    verdicts.append(
+                        Verdict(
+                            "dropped",
+                            step_names[j],
+                            b,
+                            (demo.name,),
+                            f"{first_name} reached {first.segments[j].goal} without it",
+                        )
+                    )
+    out_slots: dict[int, list[_Slot]] = {}
+    for j in goal_steps:
+        if j in dropped and j not in replaced:
+            for s in slots[j]:
+                passed = [
+                    names[e] for e in range(1, len(names)) if e not in s.seen and not others[e - 1].correction
+                ]
+                verdicts.append(
+                    Verdict(
+                        "dropped",
+                        step_names[j],
+                        s.decision,
+                        tuple(names[e] for e in sorted(s.seen)),
+                        f"{', '.join(passed) or 'another demo'} passed it by and reached the goal some other way",
+                    )
+                )
+            out_slots[j] = []
+            continue
+        out_slots[j] = slots[j]
+        for s in slots[j]:
+            took = tuple(names[e] for e in sorted(s.seen))
+            if j in replaced:
+                kind, why = (
+                    ("added", "the person turned off where the network drove on")
+                    if not any(d.segment == j for d in decisions)
+                    else ("replaced", "the person turned off elsewhere than the table's sub-goals")
+                )
+            elif len(s.seen) > 1:
+                kind = "merged"
+                why = "the same place in every demo that took it"
+                if s.by_distance is not None:
+                    why = f"the network missed it; now the first such opening past {s.decision.odometry_m:.1f} ± {s.by_distance:.1f} m"
+            else:
+                kind, why = "kept", "only the first demo took it; no other passed it by to the goal"
+            verdicts.append(Verdict(kind, step_names[j], s.decision, took, why))
+    built = _build(first, paper, table, others, al.step_of, out_slots, opts, names)
+    kept = tuple(s.decision for j in goal_steps for s in out_slots[j] if s.source == 0)
+    return PooledSubgoals(built, tuple(verdicts), kept)
+
+
+def _build(
+    first: SegmentedRun,
+    paper: FusionTable,
+    table: FusionTable,
+    others: Sequence[FurtherDemo],
+    step_of: Sequence[Sequence[int]],
+    slots: dict[int, list[_Slot]],
+    opts: EstimateOptions,
+    names: Sequence[str],
+) -> FusionTable:
+    """The table with each goal step's final sub-goals (``slots``), every leaf's rows pooled."""
+    runs = [first, *(o.run for o in others)]
+    models = [
+        commands_of(run, requested=opts.commands, recheck_s=opts.model.recheck_s, nudge_s=opts.model.nudge_s)
+        for run in runs
+    ]
+    views = [
+        run if m.decisions is None else replace(run, informative=run.informative & m.decisions)
+        for run, m in zip(runs, models, strict=True)
+    ]
+    count = 0
+
+    def leaf(base: Step, parts: Sequence[tuple[int, np.ndarray]]) -> Step:
+        nonlocal count
+        count += 1
+        return _pooled_leaf(count - 1, base, parts, views, models, opts)
+
+    built: list[Step] = []
+    for j, old in enumerate(table.network.steps):
+        mine = slots.get(j)
+        whole = [(e, t) for e in range(len(runs)) if len(t := _ticks(views[e], step_of[e], j))]
+        if mine is None or not mine:
+            # a tour, a goal step without sub-goals, or one whose sub-goals were dropped (the paper's)
+            built.append(leaf(old if mine is None or old.network is None else paper.network.steps[j], whole))
+            continue
+        sub = _sub_parts(views, step_of, j, mine)
+        inner: list[Step] = []
+        if all(s.source == 0 for s in mine):  # the table's sub-goals, matched in other demos
+            assert old.network is not None
+            olds = iter(old.network.steps)
+            for k, s in enumerate(mine):
+                if not s.decision.at_start:
+                    drive = next(olds)
+                    if s.by_distance is not None:
+                        drive = replace(drive, landmark=_by_distance(drive.landmark, s.by_distance))
+                    inner.append(leaf(drive, sub[2 * k]))
+                inner.append(leaf(next(olds), sub[2 * k + 1]))
+            inner.append(leaf(next(olds), sub[-1]))
+        else:  # the correction's: drive on with the step's own rows, turn as the person did
+            base = old if old.network is None else paper.network.steps[j]
+            own = [(e, t) for e, t in whole if e == 0]
+            for k, s in enumerate(mine):
+                tag = f"-{k + 1}" if len(mine) > 1 else ""
+                made = decision_steps(s.decision, base, replace(base, fusion=()), tag)
+                if not s.decision.at_start:
+                    inner.append(leaf(made[0], own + sub[2 * k]))
+                inner.append(leaf(made[-1], sub[2 * k + 1]))
+            inner.append(leaf(replace(base, name=old.name), own + sub[-1]))
+        built.append(Step(old.name, old.goal, (), Network(old.name, tuple(inner))))
+    by = dict(table.estimated_by)
+    by["sources"] = list(names)
+    by["source_commands"] = [m.mode for m in models]
+    return replace(table, network=replace(table.network, steps=tuple(built)), estimated_by=by)
+
+
+def _ticks(run: SegmentedRun, step_of: Sequence[int], j: int) -> np.ndarray:
+    """The informative steps of ``run`` in its goal segments matched to network step ``j``."""
+    segs = [s.index for s, k in zip(run.segments, step_of, strict=True) if k == j]
+    return np.nonzero(np.isin(run.segment_of, segs) & run.informative)[0]
+
+
+def _sub_parts(
+    views: Sequence[SegmentedRun], step_of: Sequence[Sequence[int]], j: int, slots: Sequence[_Slot]
+) -> list[list[tuple[int, np.ndarray]]]:
+    """Per sub-segment of goal step ``j`` (drive, turn per decision, then the rest) the
+    informative steps of every demo that took each of its decisions (split at its own)."""
+    out: list[list[tuple[int, np.ndarray]]] = [[] for _ in range(2 * len(slots) + 1)]
+    for e, run in enumerate(views):
+        if not all(e in s.seen for s in slots):
+            continue  # a demo that did not take every decision of the step cannot be split like it
+        segs = [s for s, k in zip(run.segments, step_of[e], strict=True) if k == j]
+        for seg in segs[:1]:
+            own = [replace(s.seen[e], segment=seg.index) for s in slots]
+            subs = split_segments((seg,), own)
+            for i, (_, sub) in enumerate(subs):
+                ticks = np.arange(sub.start, sub.stop)
+                ticks = ticks[run.informative[ticks]]
+                if len(ticks):
+                    out[i].append((e, ticks))
+    return out
+
+
+def _by_distance(mark: Landmark | None, within_m: float) -> Landmark | None:
+    """The opening landmark ``mark`` met by distance: the first opening on its side past
+    ``odometry_m − within_m``."""
+    if mark is None or mark.kind != "opening" or mark.odometry_m is None:
+        return mark
+    return replace(mark, within_m=round(within_m, 2), count=OpeningCount.ALL)
+
+
+def _pooled_leaf(
+    leaf_no: int,
+    base: Step,
+    parts: Sequence[tuple[int, np.ndarray]],
+    views: Sequence[SegmentedRun],
+    models: Sequence[Commands],
+    opts: EstimateOptions,
+) -> Step:
+    """``base`` with every row a further demo (any but the first) adds steps to estimated again
+    on the pooled steps of ``parts``; its other rows as they are."""
+    behaviors = views[0].names
+    by_bac: dict[int, list[tuple[int, np.ndarray]]] = {}
+    for e, ticks in parts:
+        bac = views[e].bac[ticks]
+        for b in sorted(set(bac.tolist())):
+            if b:
+                by_bac.setdefault(int(b), []).append((e, ticks[bac == b]))
+    rows = {r.bac: r for r in base.fusion}
+    bins = models[0].bins
+    changed = False
+    for b, bparts in sorted(by_bac.items()):
+        added = sum(len(t) for e, t in bparts if e != 0)
+        if not added:
+            continue
+        app = tuple(i for i in range(len(behaviors)) if b >> i & 1)
+        p = problem_of(bparts, views, app, models, bins)
+        est = estimate_groups([p], opts=opts, rng=row_rng(opts.seed, SUBSTEP, leaf_no, b), bins=bins)[0]
+        err = float(np.degrees(angle_errors(p.vectors, p.demo, est.weights).mean()))
+        app_names = [behaviors[i] for i in app]
+        before = rows.get(b)
+        total = sum(len(t) for _, t in bparts)
+        changed = True
+        rows[b] = FusionRow(
+            bac=b,
+            weights={nm: float(x) for nm, x in zip(app_names, est.weights, strict=True)},
+            std={nm: float(x) for nm, x in zip(app_names, est.std, strict=True)},
+            samples=total,
+            fit_error_deg=err if math.isfinite(err) else 180.0,
+            low_samples=total < opts.min_samples,
+            trial_std=None
+            if est.trial_std is None
+            else {nm: float(x) for nm, x in zip(app_names, est.trial_std, strict=True)},
+            identifiable=est.identifiable,
+            samples_added=added,
+            weights_before=None if before is None else dict(before.weights),
+        )
+    if not changed:
+        return base
+    return replace(base, fusion=tuple(rows[b] for b in sorted(rows)))

@@ -1,0 +1,75 @@
+"""Decisions matched across demos, and a correction's change said per step (the pieces; the
+whole on a building: tests/execute/test_correction_subgoals.py)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+from lfdfuse.estimate.pooled_subgoals import Verdict, same_place
+from lfdfuse.network.changes import step_changes
+from lfdfuse.network.landmark_goals import Landmark
+from lfdfuse.network.table import FusionRow, FusionTable, Network, Step
+from lfdfuse.segment.decisions import DecisionPoint
+
+SPUR = DecisionPoint(
+    segment=1,
+    side="left",
+    onset=400,
+    turn_end=440,
+    nth=2,
+    since=300,
+    odometry_m=12.0,
+    angle_rad=math.radians(85.0),
+    divergence_rad=0.5,
+    ahead_open=True,
+)
+
+
+def test_the_same_turn_off_is_matched_within_its_tolerance_and_nothing_else() -> None:
+    assert same_place(SPUR, replace(SPUR, odometry_m=14.5, nth=3, onset=900, since=800))  # 30 % of 12 m
+    assert not same_place(SPUR, replace(SPUR, odometry_m=16.0))
+    assert same_place(replace(SPUR, odometry_m=2.0), replace(SPUR, odometry_m=3.4))  # at least 1.5 m
+    assert not same_place(SPUR, replace(SPUR, side="right"))
+    assert not same_place(SPUR, replace(SPUR, ahead_open=False))  # a corner is not a side opening
+    assert same_place(SPUR, replace(SPUR, ahead_open=None))  # a shape one demo did not name
+    assert not same_place(SPUR, replace(SPUR, angle_rad=math.radians(150.0)))
+    assert not same_place(SPUR, replace(SPUR, at_start=True))
+
+
+def test_a_verdict_says_what_where_and_why() -> None:
+    line = Verdict("added", "reach-green", SPUR, ("fix.seg.mcap",), "the person turned off").describe()
+    assert (
+        line
+        == "added    reach-green: turn 85° left at opening 2, 12.0 m (fix.seg.mcap): the person turned off"
+    )
+
+
+def _row(bac: int, w: float) -> FusionRow:
+    return FusionRow(
+        bac=bac, weights={"a": w, "b": 1.0 - w}, std={"a": 0.1, "b": 0.1}, samples=40, fit_error_deg=5.0
+    )
+
+
+def _table(*steps: Step) -> FusionTable:
+    return FusionTable(("a", "b"), {"a": 0.5, "b": 0.5}, Network("t", steps))
+
+
+def test_step_changes_name_new_sub_goals_and_re_weighted_rows_only() -> None:
+    red = Step("reach-red", "red", (_row(3, 0.4),))
+    green = Step("reach-green", "green", (_row(3, 0.5), _row(1, 0.9)))
+    old = _table(red, green)
+    assert step_changes(old, old) == []
+    reweighted = _table(red, replace(green, fusion=(_row(3, 0.6), _row(1, 0.9), _row(2, 0.2))))
+    assert step_changes(old, reweighted) == ["reach-green: re-weights 1 row(s), adds 1 row(s)"]
+    inner = (
+        replace(green, name="to-left-opening-2", goal=None, landmark=Landmark("opening", "left", 2, 12.0)),
+        Step("turn-left", None, (_row(3, 0.1),), landmark=Landmark("turned", "left", angle_rad=1.4)),
+        green,
+    )
+    nested = _table(red, Step("reach-green", "green", (), Network("reach-green", inner)))
+    (line,) = step_changes(old, nested)
+    assert line == (
+        "reach-green: now to-left-opening-2 (the 2nd opening on the left (the teacher met it after 12.0 m))"
+        " → turn-left (turned 80° to the left) → reach-green"
+    )

@@ -1,0 +1,141 @@
+"""A scripted person who corrects a learned table where its robot left the teacher's path.
+
+Given a failed run of the table (its log) and the teacher's path, :func:`correction_plan` finds
+where the robot left the path (:func:`lfdfuse.execute.check.follow`: the last point of the
+teacher's path it met in order). :func:`record_correction` then runs ``teleop --table`` from the
+same start and seed — tick for tick the failed run until the person takes over — and a
+:class:`PathPerson` takes over a little before that point, drives the teacher's path (pure
+pursuit, as a Twist client would) through the place the robot missed and some metres past it,
+and hands back; the network drives on. The log is segmented with the table's behaviours.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from lfdfuse.execute.check import path_points
+from lfdfuse.execute.correct import correct, correction_driver
+from lfdfuse.log.reader import read_run
+from lfdfuse.network.table import FusionTable
+from lfdfuse.robot.pose import Pose
+from lfdfuse.segment.pipeline import segment_file
+from lfdfuse.sources.teleop.clock import SimClock
+from lfdfuse.sources.teleop.inputs import Input
+from lfdfuse.sources.teleop.script import SOURCE, TWIST_SCHEMA, twist_payload
+from lfdfuse.sources.teleop.session import TeleopOptions, TeleopSession, make_session
+from lfdfuse.world.model import World
+
+#: the person takes over this long (s) before the robot met the last point of the path it followed
+LEAD_S = 2.0
+#: and drives the teacher's path this far (m) past the first point the robot missed
+PAST_M = 6.0
+RADIUS_M = 1.0  # a path point is met within this (as the check's)
+LOOKAHEAD_M = 0.8
+SPEED_MPS = 0.4
+
+
+@dataclass(frozen=True)
+class CorrectionPlan:
+    """When the person takes over (s of the run), and the teacher's path they drive ``(n, 2)``."""
+
+    take_s: float
+    path_xy: np.ndarray
+
+
+def correction_plan(teacher_xy: np.ndarray, robot_xy: np.ndarray, dt_s: float) -> CorrectionPlan | None:
+    """Where the person takes over a run that left the teacher's path (None: it never left it)."""
+    pts = path_points(teacher_xy).tolist()
+    t = 0
+    last_i, last_t = pts[0], 0
+    missed = None
+    for i in pts:
+        d = np.hypot(*(robot_xy[t:] - teacher_xy[i]).T)
+        hit = np.nonzero(d < RADIUS_M)[0]
+        if not len(hit):
+            missed = i
+            break
+        t += int(hit[0])
+        last_i, last_t = i, t
+    if missed is None:
+        return None
+    take = max(last_t - round(LEAD_S / dt_s), 1)
+    # the path from the teacher's point nearest where the robot is at the takeover
+    here = robot_xy[take]
+    lo = max(last_i - 200, 0)
+    start = lo + int(np.argmin(np.hypot(*(teacher_xy[lo : last_i + 1] - here).T)))
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(teacher_xy, axis=0).T))])
+    end = int(np.searchsorted(s, s[missed] + PAST_M))
+    return CorrectionPlan(take * dt_s, teacher_xy[start : min(end, len(teacher_xy) - 1) + 1])
+
+
+class PathPerson:
+    """An input source: from ``plan.take_s`` a Twist each period toward the path ``lookahead``
+    ahead (pure pursuit on the session's last pose), a hand-back at the path's end."""
+
+    def __init__(self, plan: CorrectionPlan) -> None:
+        self.plan = plan
+        self.session: TeleopSession | None = None
+        self._at = 0
+        self.done = False
+
+    def poll(self, t_s: float) -> list[Input]:
+        if self.done or t_s < self.plan.take_s - 1e-9 or self.session is None:
+            return []
+        snap = self.session.snapshot
+        if snap is None:
+            return []
+        pose = snap.pose
+        path = self.plan.path_xy
+        d = np.hypot(path[:, 0] - pose.x, path[:, 1] - pose.y)
+        near = self._at + int(np.argmin(d[self._at : self._at + 40]))
+        self._at = near
+        if near >= len(path) - 3:
+            self.done = True
+            return [Input("handback", "path driven", SOURCE)]
+        ahead = near
+        while ahead < len(path) - 1 and d[ahead] < LOOKAHEAD_M:
+            ahead += 1
+        gx, gy = path[ahead]
+        err = math.atan2(gy - pose.y, gx - pose.x) - pose.theta
+        err = math.atan2(math.sin(err), math.cos(err))
+        v = SPEED_MPS * max(0.0, math.cos(err)) if abs(err) < math.radians(60) else 0.0
+        w = max(-1.0, min(1.0, 2.0 * err))
+        return [Input("message", twist_payload(v, w), SOURCE, TWIST_SCHEMA)]
+
+
+def record_correction(
+    table: FusionTable,
+    *,
+    world: World,
+    start: Pose,
+    seed: int,
+    failed_log: Path,
+    teacher_xy: np.ndarray,
+    max_time_s: float,
+    out: Path,
+) -> Path | None:
+    """Correct ``table``'s failed run (its log ``failed_log``, from ``start`` with ``seed``) with a
+    :class:`PathPerson`; returns the segmented correction log, or None when the run never left
+    the teacher's path (nothing to correct there)."""
+    run = read_run(failed_log)
+    if run.pose is None:
+        return None
+    dt_s = float(np.median(np.diff(run.t_ns))) / 1e9
+    plan = correction_plan(teacher_xy, np.asarray(run.pose[:, :2]), dt_s)
+    if plan is None:
+        return None
+    opts = TeleopOptions(
+        world=world, input_name="script:path-person", seed=seed, start=start, duration_s=max_time_s
+    )
+    person = PathPerson(plan)
+    driver = correction_driver(opts, table)
+    session = make_session(opts, inputs=[person], clock=SimClock(), network=driver)
+    person.session = session
+    correct(opts, session=session, driver=driver, table_name="table.yaml", out=out)
+    seg = out.with_suffix(".seg.mcap")
+    segment_file(out, out=seg, behaviors=",".join(table.behaviors))
+    return seg
