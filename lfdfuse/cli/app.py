@@ -20,7 +20,8 @@ from lfdfuse.cli.common import MAX_SEED
 
 def _tidy(params: list[Any]) -> list[Any]:  # typer's parameter classes are a vendored click: Any
     """Parameters as their help should show them at 80 columns: a flag with nothing after its
-    name, an argument by its NAME (with ``...`` when it takes several), a choice as
+    name, an argument by its NAME (with ``...`` when it takes several), a repeatable option by
+    the kind of one value, a choice as
     ``<a | b | c>`` (so a narrow column wraps between choices, never inside one), and a seed's
     range without its 19-digit top."""
     for p in params:
@@ -35,6 +36,8 @@ def _tidy(params: list[Any]) -> list[Any]:  # typer's parameter classes are a ve
                 arg.metavar = (arg.metavar or "").removesuffix("...") + "..."
                 kind = "path" if "Path" in arg.bare_type() else "value"
                 arg.display_type_rich = lambda ctx, kind=kind: f"<{kind}>..."
+        elif getattr(p, "multiple", False) and p.metavar is None:  # repeated: one value each time
+            p.metavar = "<path>" if desc is not None and "Path" in str(desc.annotation) else "<value>"
         elif desc is not None and desc.is_choice and p.metavar is None:
             p.metavar = "<" + " | ".join(str(getattr(c, "value", c)) for c in desc.choices or ()) + ">"
         if getattr(p, "max", None) == MAX_SEED:

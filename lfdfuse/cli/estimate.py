@@ -82,7 +82,7 @@ def estimate_cmd(
       lfdfuse estimate demo.seg.mcap --method nnls -o nnls.yaml
       lfdfuse estimate a.seg.mcap b.seg.mcap c.seg.mcap -o pooled.yaml
       lfdfuse estimate demo.seg.mcap correction.seg.mcap -o corrected.yaml
-      lfdfuse estimate demo.seg.mcap correction.seg.mcap --subgoals -o corrected.yaml
+      lfdfuse estimate demo.seg.mcap fix.seg.mcap --subgoals -o fixed.yaml
     """
     check_outputs([out], list(srcs))
     pf = replace(PFParams(), particles=particles, likelihood=likelihood.literal)

@@ -164,7 +164,7 @@ def teleop_cmd(
       lfdfuse teleop --input foxglove --port 8765 --duration 600 -o mine.mcap
       lfdfuse teleop --input script --script drive.yaml -o scripted.mcap
       lfdfuse teleop --table t.yaml --input script --script fix.yaml -o fix.mcap
-      lfdfuse teleop --table t.yaml --demo demo.seg.mcap --estimate-to fixed.yaml -o fix.mcap
+      lfdfuse teleop --table t.yaml --demo d.seg.mcap --estimate-to t2.yaml
     """
     if (input_ is InputKind.SCRIPT) != (script is not None):
         raise ConfigError("--script FILE goes with --input script (and only with it)")
