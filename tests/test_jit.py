@@ -21,6 +21,16 @@ def _sum(x: np.ndarray) -> float:
 
 def test_an_interrupt_during_compilation_is_raised_after_it() -> None:
     """Ctrl-C while a kernel compiles: the kernel finishes, then KeyboardInterrupt reaches the caller."""
+    before = signal.signal(
+        signal.SIGINT, signal.default_int_handler
+    )  # as in a command (a test worker may ignore it)
+    try:
+        _interrupted_while_compiling()
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
+def _interrupted_while_compiling() -> None:
     k = jit.Kernel(_sum)
     inside: list[bool] = []
     with pytest.raises(KeyboardInterrupt):

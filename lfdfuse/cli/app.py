@@ -90,6 +90,13 @@ class _Commands(MutableMapping[str, Any]):
 
     def __init__(self, built: MutableMapping[str, Any]) -> None:
         self._built = dict(built)
+        # a command module imported before the root was built (a test, a library user) registered
+        # its command as typer would: build it again as every lazily imported one is built
+        finish(app)
+        for info in app.registered_commands:
+            name = _registered_name(info)
+            if name in self._built and not isinstance(self._built[name], Command):
+                self._built[name] = self._build(info)
 
     def __getitem__(self, name: str) -> Any:
         if name not in self._built:
@@ -98,12 +105,14 @@ class _Commands(MutableMapping[str, Any]):
             importlib.import_module(f"lfdfuse.cli.{COMMANDS[name]}")
             finish(app)
             info = next(i for i in app.registered_commands if _registered_name(i) == name)
-            self._built[name] = typer.main.get_command_from_info(
-                info,
-                pretty_exceptions_short=app.pretty_exceptions_short,
-                rich_markup_mode=app.rich_markup_mode,
-            )
+            self._built[name] = self._build(info)
         return self._built[name]
+
+    @staticmethod
+    def _build(info: Any) -> Any:
+        return typer.main.get_command_from_info(
+            info, pretty_exceptions_short=app.pretty_exceptions_short, rich_markup_mode=app.rich_markup_mode
+        )
 
     def __setitem__(self, name: str, cmd: Any) -> None:
         self._built[name] = cmd

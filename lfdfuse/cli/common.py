@@ -20,15 +20,15 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from lfdfuse.errors import ConfigError, LfdError
 
 
-class _Console(Console):
+class PipedConsole(Console):
     """rich's console, but a closed pipe is left to :func:`user_errors` (rich exits 1 on it)."""
 
     def on_broken_pipe(self) -> None:
         raise BrokenPipeError
 
 
-console = _Console(highlight=False)
-err_console = _Console(stderr=True, highlight=False)
+console = PipedConsole(highlight=False)
+err_console = PipedConsole(stderr=True, highlight=False)
 # piped output keeps its long lines whole (a file or a grep has no 80-column screen to fit)
 console.soft_wrap = not console.is_terminal
 

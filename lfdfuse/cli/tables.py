@@ -15,7 +15,7 @@ from rich.measure import Measurement
 from rich.table import Column, Table
 from rich.text import Text
 
-from lfdfuse.cli.common import console
+from lfdfuse.cli.common import PipedConsole, console
 
 
 def show(table: Table) -> None:
@@ -23,7 +23,7 @@ def show(table: Table) -> None:
     if not console.is_terminal:
         need = Measurement.get(console, console.options.update_width(10_000), table).maximum
         # console.print(width=) never exceeds the console's own width: a console as wide as the table
-        Console(highlight=False, width=max(console.width, need)).print(table)
+        PipedConsole(highlight=False, width=max(console.width, need)).print(table)
         return
     for i, part in enumerate(fitted(table, console.width)):
         if i:

@@ -334,18 +334,11 @@ def test_subgoals_read_the_log_once_and_refine_the_table_they_are_given(
     _tmp, seg = office
     calls: dict[str, list[int]] = {"estimate_run": [], "problems": []}
     passes: list[Any] = []  # the topics of every pass over the file's messages
-    make_reader = reader.make_reader
+    in_order = reader.in_log_time_order
 
-    def counted_reader(stream: Any, **kwargs: Any) -> Any:
-        mcap = make_reader(stream, **kwargs)
-        iter_messages = mcap.iter_messages
-
-        def counted(*args: Any, **kw: Any) -> Any:
-            passes.append(kw.get("topics", args[0] if args else None))
-            return iter_messages(*args, **kw)
-
-        mcap.iter_messages = counted
-        return mcap
+    def counted_pass(mcap: Any, stream: Any, topics: Any = None) -> Any:
+        passes.append(topics)
+        return in_order(mcap, stream, topics)
 
     def counted(name: str, fn: Any) -> Any:
         def wrapper(*args: Any, **kwargs: Any) -> Any:
@@ -358,7 +351,7 @@ def test_subgoals_read_the_log_once_and_refine_the_table_they_are_given(
         calls["problems"].append(len(problems))
         return estimate_groups(problems, **kwargs)
 
-    monkeypatch.setattr(reader, "make_reader", counted_reader)
+    monkeypatch.setattr(reader, "in_log_time_order", counted_pass)
     monkeypatch.setattr(learn, "estimate_run", counted("estimate_run", pipeline.estimate_run))
     monkeypatch.setattr(segments, "estimate_groups", groups)
     fast = EstimateOptions(smc=SMCParams(particles=96))  # the counts, not the weights, are checked
