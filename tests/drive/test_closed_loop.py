@@ -105,6 +105,20 @@ def test_drive_the_real_teleop_server_then_sigterm(keep_left: Path, tmp_path: Pa
     assert EXE is not None
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     demo, live_log = tmp_path / "teleop.mcap", tmp_path / "live.mcap"
+    # the network's compiled kernels cached first (a fresh install compiles them on the first
+    # tick): the 5 s below count the live loop's ticks, not a one-time compilation
+    warm = [
+        EXE,
+        "execute",
+        str(keep_left),
+        "--world",
+        "building",
+        "--max-time",
+        "1",
+        "--report",
+        str(tmp_path / "w.json"),
+    ]
+    assert subprocess.run(warm, capture_output=True, env=env, timeout=300).returncode == 0
     teleop = subprocess.Popen(
         [EXE, "teleop", "--input", "foxglove", "--port", "0", "--world", "tee", "-o", str(demo)],
         stdout=subprocess.PIPE,
