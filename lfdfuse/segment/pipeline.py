@@ -139,7 +139,14 @@ def segment_file(
     outputs = compute_in_chunks(obs, names, params)
     tell(progress, _READ + _COMPUTE, 1.0)
     segm = segment_outputs(outputs)
-    mode = detect_commands(run.cmd_v_mps, run.cmd_omega_rps, run.metadata, run.topics, commands)
+    # a correction log (teleop --table): the network's own commands are the learner's, not the
+    # teacher's, and say nothing of how the person commands (a run the network drove throughout
+    # teaches nothing either way: all its commands decide)
+    by_net = network_ticks(src, run.cmd_t_ns)
+    person = slice(None) if by_net is None or by_net.all() else ~by_net
+    mode = detect_commands(
+        run.cmd_v_mps[person], run.cmd_omega_rps[person], run.metadata, run.topics, commands
+    )
     fits = tuple(lag_fits(run, outputs, drive)) if measure_lag or lag_s is None else ()
     if lag_s is None:
         lag_s = best_lag(fits)
@@ -150,8 +157,7 @@ def segment_file(
     tell(progress, _READ + _COMPUTE + _LAG, 1.0)
     lag_ns = lag_ns_of(lag_s)
     vr, ok = demonstrated(run, drive, lag_ns=lag_ns)
-    # a correction log (teleop --table): the network's own ticks are the learner's, not the
-    # teacher's; the command paired with a scan is the one in force ``lag`` later, so is its driver
+    # the command paired with a scan is the one in force ``lag`` later, so is its driver
     net = network_ticks(src, run.t_ns + np.int64(lag_ns))
     if net is not None:
         ok = ok & ~net

@@ -137,6 +137,22 @@ def test_segment_marks_the_networks_ticks_non_informative(correction: dict[str, 
     assert not read_segmented(correction["net"]).informative.any()
 
 
+def test_a_correction_is_read_by_the_persons_own_command_model(
+    correction: dict[str, Path], tmp_path: Path
+) -> None:
+    """Only the person's commands decide the command model: keys pressed in a keyboard
+    correction are discrete (the network's ticks between them take hundreds of values), and a
+    person driving on the drive mapping stays continuous."""
+    from tests.sources.teleop.correction import correction_log
+
+    keys, _person = correction_log(tmp_path)
+    segment_file(keys, out=tmp_path / "keys.seg.mcap", behaviors=BEHAVIORS, measure_lag=False)
+    seg = read_segmented(tmp_path / "keys.seg.mcap")
+    net = int(seg.metadata["segment_network_ticks"])
+    assert seg.metadata["segment_commands"] == "discrete" and net > len(seg.t_ns) // 2
+    assert read_segmented(correction["corr"]).metadata["segment_commands"] == "continuous"
+
+
 def test_a_correction_changes_only_the_rows_the_person_drove_in(correction: dict[str, Path]) -> None:
     alone = learn([correction["demo"]]).table
     pooled = learn([correction["demo"], correction["corr"]]).table

@@ -4,7 +4,8 @@ The ring-spur task learned without sub-goals (:mod:`tests.support.offroute`: see
 seed 0 estimate) reaches red and green, then shuttles in the dead-end spur after green and never
 reaches blue. A person takes over once from the teacher's start (``teleop --table --input script
 --script tests/sources/teleop/ring-spur-fix.yaml``), drives out of the spur toward blue and hands
-back; ``segment`` (the table's behaviours) and ``estimate demo fix`` pool the two logs. Every
+back; ``segment`` (the table's behaviours, ``--commands continuous``) and ``estimate demo fix``
+pool the two logs. Every
 row that changes is a (step, BAC) row the person drove in (measured: all 5 of them, in step
 reach-blue), every other row is bit-identical, and the fixed table completes the task from the
 failed start and from two perturbed ones, without a collision.
@@ -15,6 +16,11 @@ the default pf estimator (seed 0) with 128 particles instead of 384: the numbers
 with either (the same failure, the same 5 rows changed, 3/3 starts complete, 0 collisions), and
 the two estimates take about 6 s instead of 18. Only the failing run is bounded by the task's
 300 s; the fixed runs end when the task completes (about 245 s simulated).
+
+The script holds three exact twists, so ``segment --commands auto`` reads it as a person's few
+held commands (discrete): then a held command is evidence where it is pressed, not at every
+tick, and the correction adds 21 samples instead of 183 — too few to fix the table (0 of 3
+starts). Its author means every tick of those twists: the drive mapping reads it so.
 """
 
 from __future__ import annotations
@@ -88,7 +94,17 @@ def test_one_scripted_correction_fixes_the_ring_spur_table_and_changes_only_its_
         "-o",
         str(fix),
     )
-    _cli("segment", str(fix), "--behaviors", ",".join(table.behaviors), "-o", str(tmp_path / "fix.seg.mcap"))
+    behaviors = ",".join(table.behaviors)
+    _cli(
+        "segment",
+        str(fix),
+        "--behaviors",
+        behaviors,
+        "--commands",
+        "continuous",
+        "-o",
+        str(tmp_path / "fix.seg.mcap"),
+    )
     _cli(
         "estimate",
         str(demo),
