@@ -19,18 +19,16 @@ from __future__ import annotations
 
 import asyncio
 import math
-import signal
 import time
 from collections import Counter
 from collections.abc import Iterator
 from contextlib import suppress
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from lfdfuse.drive.decode import LiveOdom, LiveScan, LiveTf, LiveTwist, Role
 from lfdfuse.drive.frames import TfTree
-from lfdfuse.drive.lifecycle import BACKOFF_S, CONNECT_TIMEOUT_S
+from lfdfuse.drive.links import Links
 from lfdfuse.drive.options import DriveError, Notify, Stopper
 from lfdfuse.drive.session import TRANSPORTS
 from lfdfuse.drive.transport import Arrival, Link, Lost, Ready, Topics, Transport
@@ -95,9 +93,8 @@ class _Recording:
         self.received: Counter[str] = Counter()
         self.warned: Counter[str] = Counter()
         self.publishers: set[str] = set()
-        self.connections = 0
         self._clock: tuple[int, float] | None = None  # (last scan stamp, its arrival)
-        self._unreachable = ""
+        self.links = Links(transport, stopper, warn=self.warn, notify=notify)
 
     def warn(self, key: str, text: str) -> None:
         if not self.warned[key]:
@@ -167,61 +164,12 @@ class _Recording:
             self.publishers.update(link.publishers(self.opts.cmd_topic))
             await link.close()
 
-    async def run(self) -> str:
-        loop = asyncio.get_running_loop()
-        stop = asyncio.Event()
-        self.stopper.bind(loop, stop)
-        handlers: dict[signal.Signals, Any] = {}
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            try:
-                previous = signal.getsignal(sig)
-                loop.add_signal_handler(sig, self.stopper.stop, f"signal {sig.name}")
-                handlers[sig] = previous
-            except (RuntimeError, ValueError, NotImplementedError):
-                pass  # not the main thread (a test): stop through the Stopper
-        timer = None
-        if self.opts.duration_s is not None:
-            timer = loop.call_later(self.opts.duration_s, self.stopper.stop, "--duration")
-        if self.stopper.reason:
-            stop.set()
-        try:
-            await self._links(stop)
-        finally:
-            if timer is not None:
-                timer.cancel()
-            for sig, previous in handlers.items():
-                loop.remove_signal_handler(sig)
-                signal.signal(sig, previous)
-        return self.stopper.reason or "stopped"
+    @property
+    def connections(self) -> int:
+        return self.links.connections
 
-    async def _links(self, stop: asyncio.Event) -> None:
-        backoff = BACKOFF_S[0]
-        first_by = time.monotonic() + CONNECT_TIMEOUT_S
-        while not stop.is_set():
-            try:
-                link = await self.transport.connect(timeout_s=CONNECT_TIMEOUT_S, warn=self.warn)
-            except Lost as exc:
-                self._unreachable = str(exc)
-                if self.connections == 0 and time.monotonic() > first_by:
-                    break
-            else:
-                self.connections += 1
-                backoff = BACKOFF_S[0]
-                if self.connections > 1:
-                    self.notify(f"reconnected to {self.transport.url}")
-                try:
-                    await self.link(link, stop)
-                except Lost as exc:
-                    if not stop.is_set():
-                        self.warn(f"lost {self.connections}", f"connection lost ({exc}): reconnecting")
-            if stop.is_set():
-                break
-            with suppress(TimeoutError):
-                await asyncio.wait_for(stop.wait(), timeout=backoff)
-            backoff = min(backoff * 2, BACKOFF_S[1])
-        if self.connections == 0:
-            why = self._unreachable or f"stopped ({self.stopper.reason or 'stopped'}) before it answered"
-            raise DriveError(f"cannot connect to {self.transport.url}: {why}")
+    async def run(self) -> str:
+        return await self.links.run(self.link, duration_s=self.opts.duration_s)
 
     def source(self, fmt: str) -> LiveSource:
         bases = tuple(dict.fromkeys(b for b in (self.base, *BASE_FRAMES) if b))

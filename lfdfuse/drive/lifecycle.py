@@ -17,7 +17,6 @@ from __future__ import annotations
 import asyncio
 import gc
 import math
-import signal
 import time
 from collections import Counter
 from contextlib import nullcontext, suppress
@@ -29,17 +28,15 @@ import numpy as np
 from lfdfuse import __version__
 from lfdfuse.drive.core import Applicability, DriveCore, Inputs, Skip, applicability, check_applicable
 from lfdfuse.drive.decode import LiveOdom, LiveScan, LiveTargets, LiveTf, LiveTwist, Role
+from lfdfuse.drive.links import Links
 from lfdfuse.drive.options import DriveError, DriveOptions, DriveSummary, Notify, Stopper
 from lfdfuse.drive.record import LiveRecorder
 from lfdfuse.drive.safety import WATCHDOG_PERIOD_S, limits_of
 from lfdfuse.drive.transport import Arrival, Link, Lost, Ready, Transport
 from lfdfuse.log.writer import LogWriter
 
-#: the first connection must open within this (a later one is retried while --duration lasts)
-CONNECT_TIMEOUT_S = 3.0
 #: how long after connecting the link must be ready (the scan found)
 READY_TIMEOUT_S = 3.0
-BACKOFF_S = (0.2, 2.0)  # first retry delay, the longest
 STATUS_PERIOD_S = 5.0
 ZERO_PERIOD_S = 0.1  # the zero Twist's repeat while blind
 
@@ -71,7 +68,7 @@ class _Session:
         self.app: Applicability | None = None
         self.latencies: list[float] = []
         self.cpu: list[float] = []
-        self.sent = self.zeros = self.connections = 0
+        self.sent = self.zeros = 0
         self.warned: Counter[str] = Counter()
         self.command = ""  # the command's encoding and type, as the last ready link said
         self.ready = False  # the current link is ready (commands may go out)
@@ -83,7 +80,7 @@ class _Session:
         self._last_status = 0.0
         self._last_zero_s = -math.inf
         self._robot_clock: tuple[int, float] | None = None  # (stamp, monotonic s) of the last tick
-        self._unreachable = ""  # why the last attempt to connect failed
+        self.links = Links(transport, stopper, warn=self.warn, notify=notify, reconnected=self._reconnected)
 
     def _robot_now_ns(self) -> int:
         """The robot's clock now, from the last scan's stamp (our epoch clock before any)."""
@@ -259,65 +256,16 @@ class _Session:
                     return
 
     # -- the run ----------------------------------------------------------------------------
-    async def run(self) -> str:
-        loop = asyncio.get_running_loop()
-        stop = asyncio.Event()
-        self.stopper.bind(loop, stop)
-        if self.stopper.reason:
-            stop.set()
-        handlers: dict[signal.Signals, Any] = {}
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            try:
-                previous = signal.getsignal(sig)
-                loop.add_signal_handler(sig, self.stopper.stop, f"signal {sig.name}")
-                handlers[sig] = previous
-            except (RuntimeError, ValueError, NotImplementedError):
-                pass  # not the main thread (a test): stop through the Stopper
-        timer = None
-        if self.opts.duration_s is not None:
-            timer = loop.call_later(self.opts.duration_s, self.stopper.stop, "--duration")
-        try:
-            await self._links(stop)
-        finally:
-            if timer is not None:
-                timer.cancel()
-            for sig, previous in handlers.items():
-                loop.remove_signal_handler(sig)
-                signal.signal(sig, previous)  # the caller's (the CLI's SIGTERM → clean unwinding)
-        return self.stopper.reason or "stopped"
+    def _reconnected(self) -> None:
+        if self.core is not None:
+            self.core.reconnected()
 
-    async def _links(self, stop: asyncio.Event) -> None:
-        """Connect, serve, and reconnect with back-off until ``stop``."""
-        url = self.transport.url
-        backoff = BACKOFF_S[0]
-        first_by = time.monotonic() + CONNECT_TIMEOUT_S
-        while not stop.is_set():
-            try:
-                link = await self.transport.connect(timeout_s=CONNECT_TIMEOUT_S, warn=self.warn)
-            except Lost as exc:
-                self._unreachable = str(exc)
-                if self.connections == 0 and time.monotonic() > first_by:
-                    break
-            else:
-                self.connections += 1
-                backoff = BACKOFF_S[0]
-                if self.connections > 1:
-                    self.notify(f"reconnected to {url}")
-                    if self.core is not None:
-                        self.core.reconnected()
-                try:
-                    await self.connection(link, stop)
-                except Lost as exc:
-                    if not stop.is_set():
-                        self.warn(f"lost {self.connections}", f"connection lost ({exc}): reconnecting")
-            if stop.is_set():
-                break
-            with suppress(TimeoutError):  # back off, but wake at once on stop
-                await asyncio.wait_for(stop.wait(), timeout=backoff)
-            backoff = min(backoff * 2, BACKOFF_S[1])
-        if self.connections == 0:
-            why = self._unreachable or f"stopped ({self.stopper.reason or 'stopped'}) before it answered"
-            raise DriveError(f"cannot connect to {url}: {why}")
+    @property
+    def connections(self) -> int:
+        return self.links.connections
+
+    async def run(self) -> str:
+        return await self.links.run(self.connection, duration_s=self.opts.duration_s)
 
 
 def run_live(
