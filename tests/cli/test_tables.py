@@ -15,6 +15,7 @@ from typer.testing import CliRunner
 from lfdfuse.cli import common
 from lfdfuse.cli.main import app
 from lfdfuse.cli.tables import fitted
+from lfdfuse.network.table import FusionTable, dump_table
 
 NUMBER = re.compile(r"[-+]?\d[\d.,/±%°]*\*?")
 
@@ -76,5 +77,47 @@ def test_the_full_preset_table_keeps_every_number_at_80_columns(
     rows = [ln for ln in whole.splitlines() if re.match(r"\s*\d+\??\s", ln)]
     assert rows, whole
     for ln in rows:  # every number of every BAC row is in the narrow rendering
+        for n in NUMBER.findall(ln):
+            assert n in narrow, f"{n} of '{ln.strip()}' missing at 80 columns"
+
+
+def test_the_readme_commands_tables_fit_80_columns(
+    tmp_path: Path, three_goal_segmented: Path, three_goal_table: FusionTable, terminal: None
+) -> None:
+    """What the README's table commands print on an 80-column terminal: no line wider, no number
+    cut (``…``), every number of the table's rows shown (the learned table, the segmented demo,
+    the held-out evaluation, a success rate over starts, the worlds, a real robot bag)."""
+    from tests.conftest import SHARED
+
+    table = tmp_path / "task.yaml"
+    table.write_text(dump_table(three_goal_table))
+    demo = str(three_goal_segmented)
+    commands = [
+        ["inspect", str(table)],
+        ["inspect", demo],
+        ["evaluate", demo, "--holdout", "0.3"],
+        ["execute", str(table), "--starts", "3", "--max-time", "5"],
+        ["worlds"],
+    ]
+    bag = SHARED / "realdata" / "ros1" / "neato-keyboard-middle.bag"
+    if bag.exists():
+        commands.append(["inspect", str(bag)])
+    runner = CliRunner()
+    for args in commands:
+        res = runner.invoke(app, args)
+        assert res.exit_code == 0, (args, res.output)
+        wide = [ln for ln in res.stdout.splitlines() if len(ln) > 80]
+        cut = re.findall(r"\S*(?:\d…|…\d)\S*", res.stdout)  # metadata prose may shorten a name
+        assert not wide and not cut, (args, wide or cut)
+    # the table's rows, piped whole, against what the terminal showed
+    common.console._force_terminal = False
+    common.console.soft_wrap = True
+    whole = runner.invoke(app, ["inspect", str(table)]).stdout
+    common.console._force_terminal = True
+    common.console.soft_wrap = False
+    narrow = runner.invoke(app, ["inspect", str(table)]).stdout
+    rows = [ln for ln in whole.splitlines() if re.match(r"\s*\d+\??\s", ln)]
+    assert rows, whole
+    for ln in rows:
         for n in NUMBER.findall(ln):
             assert n in narrow, f"{n} of '{ln.strip()}' missing at 80 columns"
