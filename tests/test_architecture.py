@@ -294,7 +294,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "progress",
         "words",
         "jit",
-    ),  # the package root (its version), the error hierarchy, kernels
+        "pairwise",
+    ),  # the package root (its version), the error hierarchy, kernels and numpy's sum in them
     ("files", "validate", "parallel"),
     ("robot", "control"),  # the types every stage shares and the ROS conversion; vector ↔ command
     ("world",),

@@ -7,8 +7,8 @@ call. Each stands for a numpy function that stays the reference
 :func:`~lfdfuse.behaviors.openings.ahead_range_reference`, the primitives of
 :mod:`lfdfuse.behaviors.library`) and gives the same bits: comparisons and counts are exact,
 the beam bearings come in wrapped by numpy (no transcendental function of numba's own enters a
-result), and a sum over beams is numpy's own pairwise sum (:func:`_pairwise_dot`, operation for
-operation), so a scan computed alone, live, equals the same scan computed in a log.
+result), and a sum over beams is numpy's own pairwise sum (:func:`lfdfuse.pairwise.pairwise_sum`,
+operation for operation), so a scan computed alone, live, equals the same scan computed in a log.
 
 Every loop is a :func:`lfdfuse.jit.kernel`: nothing here imports numba.
 """
@@ -20,10 +20,7 @@ import math
 import numpy as np
 
 from lfdfuse.jit import kernel
-
-#: numpy's pairwise summation: blocks of at most this many elements are summed with eight
-#: accumulators; longer runs are split in two (at a multiple of eight) and the halves added
-PW_BLOCK = 128
+from lfdfuse.pairwise import STACK, pairwise_sum
 
 
 def _side_open_loop(
@@ -97,35 +94,6 @@ AHEAD = kernel(_ahead_loop)
 CORRIDOR = kernel(_corridor_loop)
 
 
-def pairwise_sum_reference(x: np.ndarray) -> float:
-    """numpy's pairwise sum of a contiguous 1-D float64 array, in Python (what
-    :func:`_pairwise_dot` reproduces; the tests hold both to ``np.add.reduce``)."""
-
-    def part(lo: int, n: int) -> float:
-        if n < 8:
-            res = 0.0
-            for i in range(n):
-                res += float(x[lo + i])
-            return res
-        if n <= PW_BLOCK:
-            acc = [float(x[lo + j]) for j in range(8)]
-            i = 8
-            while i < n - n % 8:
-                for j in range(8):
-                    acc[j] += float(x[lo + i + j])
-                i += 8
-            res = ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]))
-            while i < n:
-                res += float(x[lo + i])
-                i += 1
-            return res
-        n2 = n // 2
-        n2 -= n2 % 8
-        return part(lo, n2) + part(lo + n2, n - n2)
-
-    return 0.0 + part(0, len(x))
-
-
 #: the kinds of fused primitive a :func:`_pool_loop` op computes (``ops[m, 0]``)
 AVOID, WANDER, WALL_ATTRACT, WALL_SIDE, SONAR_AVOID = 0, 1, 2, 3, 4
 
@@ -157,10 +125,10 @@ def _pool_loop(
     push = np.empty(size)
     w = np.empty(size)
     buf = np.empty(size)
-    stack_lo = np.empty(64, dtype=np.int64)
-    stack_n = np.empty(64, dtype=np.int64)
-    stack_st = np.empty(64, dtype=np.int64)
-    vals = np.empty(64)
+    stack_lo = np.empty(STACK, dtype=np.int64)
+    stack_n = np.empty(STACK, dtype=np.int64)
+    stack_st = np.empty(STACK, dtype=np.int64)
+    vals = np.empty(STACK)
     s = np.empty(2)
     for i in range(n):
         for j in range(b):
@@ -216,65 +184,7 @@ def _pool_loop(
             for c in range(2):
                 for j in range(length):
                     buf[j] = w[j] * dirs[m, j, c]
-                # numpy's pairwise sum of buf[:length] (post-order over its split tree)
-                sp = 0
-                vp = 0
-                stack_lo[0] = 0
-                stack_n[0] = length
-                stack_st[0] = 0
-                sp = 1
-                while sp > 0:
-                    lo = stack_lo[sp - 1]
-                    cnt_ = stack_n[sp - 1]
-                    if cnt_ <= PW_BLOCK:
-                        sp -= 1
-                        if cnt_ < 8:
-                            res = 0.0
-                            for k in range(cnt_):
-                                res += buf[lo + k]
-                        else:
-                            a0 = buf[lo]
-                            a1 = buf[lo + 1]
-                            a2 = buf[lo + 2]
-                            a3 = buf[lo + 3]
-                            a4 = buf[lo + 4]
-                            a5 = buf[lo + 5]
-                            a6 = buf[lo + 6]
-                            a7 = buf[lo + 7]
-                            k = 8
-                            stop = cnt_ - cnt_ % 8
-                            while k < stop:
-                                a0 += buf[lo + k]
-                                a1 += buf[lo + k + 1]
-                                a2 += buf[lo + k + 2]
-                                a3 += buf[lo + k + 3]
-                                a4 += buf[lo + k + 4]
-                                a5 += buf[lo + k + 5]
-                                a6 += buf[lo + k + 6]
-                                a7 += buf[lo + k + 7]
-                                k += 8
-                            res = ((a0 + a1) + (a2 + a3)) + ((a4 + a5) + (a6 + a7))
-                            while k < cnt_:
-                                res += buf[lo + k]
-                                k += 1
-                        vals[vp] = res
-                        vp += 1
-                    elif stack_st[sp - 1] == 0:
-                        stack_st[sp - 1] = 1
-                        half = cnt_ // 2
-                        half -= half % 8
-                        stack_lo[sp] = lo + half
-                        stack_n[sp] = cnt_ - half
-                        stack_st[sp] = 0
-                        stack_lo[sp + 1] = lo
-                        stack_n[sp + 1] = half
-                        stack_st[sp + 1] = 0
-                        sp += 2
-                    else:
-                        sp -= 1
-                        vals[vp - 2] = vals[vp - 2] + vals[vp - 1]
-                        vp -= 1
-                s[c] = 0.0 + vals[0]
+                s[c] = pairwise_sum(buf, length, stack_lo, stack_n, stack_st, vals)
             if kind == WANDER:
                 vec[i, col, 0] = s[0] / max(cnt, 1)
                 vec[i, col, 1] = s[1] / max(cnt, 1)
@@ -287,4 +197,4 @@ def _pool_loop(
             vec[i, col, 1] = s[1] * scale
 
 
-POOL = kernel(_pool_loop)
+POOL = kernel(_pool_loop, calls=[pairwise_sum])
