@@ -27,7 +27,7 @@ person's correction (a ``teleop --table`` log: only the person's ticks are infor
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -42,6 +42,7 @@ from lfdfuse.estimate.subgoals import decision_steps
 from lfdfuse.network.landmark_goals import Landmark, OpeningCount
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, find_decisions, split_segments
+from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.segment.read import SegmentedRun
 from lfdfuse.segment.track import LandmarkTrack
 
@@ -64,6 +65,9 @@ class FurtherDemo:
     run: SegmentedRun
     track: LandmarkTrack
     correction: bool
+    #: a correction: the network's active step at each of its ticks (``/lfd/step``, nested names
+    #: joined by ``/``), where the log kept it; None: not known
+    steps: tuple[str | None, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -112,21 +116,79 @@ class _Slot:
     by_distance: float | None = None  # merged from a correction: the window of a distance landmark
 
 
+@dataclass(frozen=True)
+class _Inserted:
+    """A correction's decision inside one sub-step of a goal step with sub-goals: ``decision``
+    counted from where the network entered sub-step ``leaf`` (its name in the goal step's
+    network) in correction ``demo``."""
+
+    leaf: str
+    decision: DecisionPoint
+    demo: int
+
+
 def decisions_of(
-    demo: FurtherDemo, paper: FusionTable, step_of: Sequence[int], params: DecisionParams
+    demo: FurtherDemo,
+    paper: FusionTable,
+    step_of: Sequence[int],
+    params: DecisionParams,
+    segments: tuple[GoalSegment, ...] | None = None,
 ) -> list[DecisionPoint]:
-    """Decision points of a further demo, the first demo's paper table replayed on its steps."""
+    """Decision points of a further demo, the first demo's paper table replayed on its steps
+    (``segments``: of these spans of its goal segments instead)."""
     run = demo.run
     mapped = replace(run, segment_of=np.asarray(step_of, dtype=np.int64)[run.segment_of])
     fused = fused_vectors(paper, mapped, np.arange(len(run.t_ns)))
     return find_decisions(
-        segments=run.segments,
+        segments=run.segments if segments is None else segments,
         demo=run.demo,
         informative=run.informative,
         fused=fused,
         track=demo.track,
         params=params,
     )
+
+
+def _leaf_at(demo: FurtherDemo, step: str, i: int) -> str | None:
+    """The sub-step of goal step ``step`` the network of correction ``demo`` was in at tick
+    ``i`` (its name in the goal step's network), or None (no steps kept, or another step)."""
+    if demo.steps is None:
+        return None
+    at = demo.steps[i]
+    if at is None or not at.startswith(step + "/"):
+        return None
+    return at[len(step) + 1 :].split("/", 1)[0]
+
+
+def _leaf_since(demo: FurtherDemo, step: str, leaf: str, i: int, lo: int) -> int:
+    """The tick (at least ``lo``) the network of ``demo`` entered sub-step ``leaf`` of ``step``
+    that it was in at tick ``i``: where its landmarks count from."""
+    while i > lo and _leaf_at(demo, step, i - 1) == leaf:
+        i -= 1
+    return i
+
+
+def _inside(
+    demo: FurtherDemo,
+    e: int,
+    b: DecisionPoint,
+    step: Step,
+    seg: GoalSegment,
+    paper: FusionTable,
+    step_of: Sequence[int],
+    params: DecisionParams,
+) -> _Inserted | None:
+    """Correction ``demo``'s decision ``b`` as a decision of the sub-step its network was in when
+    the turn began, its landmark counted from where the network entered that sub-step (found
+    again from there); None when the network's step there is not one of ``step``'s."""
+    at = b.begin if b.begin >= 0 else b.onset
+    leaf = _leaf_at(demo, step.name, at)
+    if leaf is None or step.network is None or leaf not in {s.name for s in step.network.steps}:
+        return None
+    since = _leaf_since(demo, step.name, leaf, at, seg.start)
+    again = decisions_of(demo, paper, step_of, params, (GoalSegment(seg.index, since, seg.stop, seg.goal),))
+    mine = next((d for d in again if d.side == b.side and abs(d.onset - b.onset) <= params.lookback), None)
+    return None if mine is None else _Inserted(leaf, mine, e)
 
 
 def pool_subgoals(
@@ -162,6 +224,8 @@ def pool_subgoals(
     verdicts: list[Verdict] = []
     dropped: set[int] = set()  # goal steps back to the paper's step
     replaced: dict[int, int] = {}  # goal step -> the correction whose decisions it takes
+    labelled: dict[int, set[int]] = {}  # goal step -> corrections whose ticks go by the network's sub-step
+    inserted: dict[int, list[_Inserted]] = {}  # goal step -> corrections' decisions inside its sub-steps
     for e, demo in enumerate(others, start=1):
         found = decisions_of(demo, paper, al.step_of[e], params)
         for j in goal_steps:
@@ -186,6 +250,17 @@ def pool_subgoals(
                         abs(a.odometry_m - b.odometry_m) + params.within_min_m,
                     )
             if demo.correction:
+                step = table.network.steps[j]
+                if demo.steps is not None and step.network is not None and j not in replaced and segs:
+                    # the network's sub-step is known: a turn-off of the person's is a decision
+                    # of the sub-step the network was in, the other ticks re-weight theirs
+                    got = [
+                        _inside(demo, e, b, step, segs[0], paper, al.step_of[e], params) for b in unmatched
+                    ]
+                    if all(g is not None for g in got):
+                        labelled.setdefault(j, set()).add(e)
+                        inserted.setdefault(j, []).extend(g for g in got if g is not None)
+                        continue
                 if unmatched:
                     replaced[j] = e
                     slots[j] = [_Slot(b, e, {e: b}) for b in mine]
@@ -237,7 +312,30 @@ def pool_subgoals(
             else:
                 kind, why = "kept", "only the first demo took it; no other passed it by to the goal"
             verdicts.append(Verdict(kind, step_names[j], s.decision, took, why))
-    built = _build(first, paper, table, others, al.step_of, out_slots, opts, names)
+        if j in dropped and j not in replaced:
+            continue
+        for ins in inserted.get(j, []):
+            verdicts.append(
+                Verdict(
+                    "added",
+                    f"{step_names[j]}/{ins.leaf}",
+                    ins.decision,
+                    (names[ins.demo],),
+                    "the person turned off where the network, in this sub-step, drove on",
+                )
+            )
+    built = _build(
+        first,
+        paper,
+        table,
+        others,
+        al.step_of,
+        out_slots,
+        opts,
+        names,
+        {j: v for j, v in labelled.items() if j not in dropped or j in replaced},
+        inserted,
+    )
     kept = tuple(s.decision for j in goal_steps for s in out_slots[j] if s.source == 0)
     return PooledSubgoals(built, tuple(verdicts), kept)
 
@@ -251,8 +349,12 @@ def _build(
     slots: dict[int, list[_Slot]],
     opts: EstimateOptions,
     names: Sequence[str],
+    labelled: dict[int, set[int]],
+    inserted: dict[int, list[_Inserted]],
 ) -> FusionTable:
-    """The table with each goal step's final sub-goals (``slots``), every leaf's rows pooled."""
+    """The table with each goal step's final sub-goals (``slots``), every leaf's rows pooled;
+    ``labelled``: per goal step the corrections whose ticks go to the sub-step the network was
+    in, ``inserted`` their decisions inside sub-steps."""
     runs = [first, *(o.run for o in others)]
     models = [
         commands_of(run, requested=opts.commands, recheck_s=opts.model.recheck_s, nudge_s=opts.model.nudge_s)
@@ -277,19 +379,36 @@ def _build(
             # a tour, a goal step without sub-goals, or one whose sub-goals were dropped (the paper's)
             built.append(leaf(old if mine is None or old.network is None else paper.network.steps[j], whole))
             continue
-        sub = _sub_parts(views, step_of, j, mine)
+        by_step = labelled.get(j, set()) if all(s.source == 0 for s in mine) else set()
+        sub = _sub_parts(views, step_of, j, mine, skip=by_step)
         inner: list[Step] = []
         if all(s.source == 0 for s in mine):  # the table's sub-goals, matched in other demos
             assert old.network is not None
-            olds = iter(old.network.steps)
+            olds = list(old.network.steps)
+            pos: list[int] = []  # each sub-step's sub-segment
             for k, s in enumerate(mine):
-                if not s.decision.at_start:
-                    drive = next(olds)
-                    if s.by_distance is not None:
-                        drive = replace(drive, landmark=_by_distance(drive.landmark, s.by_distance))
-                    inner.append(leaf(drive, sub[2 * k]))
-                inner.append(leaf(next(olds), sub[2 * k + 1]))
-            inner.append(leaf(next(olds), sub[-1]))
+                pos += [2 * k, 2 * k + 1] if not s.decision.at_start else [2 * k + 1]
+            pos.append(2 * len(mine))
+            mine_ins = sorted(
+                (i for i in inserted.get(j, []) if i.demo in by_step),
+                key=lambda i: (i.demo, i.decision.onset),
+            )
+            extra, ins_parts = _labelled_parts(
+                views, others, step_of, j, old, pos, mine, mine_ins, sorted(by_step)
+            )
+            taken = {st.name for st in olds}
+            for n, (st, p) in enumerate(zip(olds, pos, strict=True)):
+                for q, ins in enumerate(mine_ins):
+                    if ins.leaf != st.name:
+                        continue
+                    made = _unique_steps(ins.decision, st, taken)
+                    drive_parts, turn_parts = ins_parts[q]
+                    if not ins.decision.at_start:
+                        inner.append(leaf(made[0], sub[p] + drive_parts))
+                    inner.append(leaf(made[-1], turn_parts))
+                if p % 2 == 0 and p < 2 * len(mine) and mine[p // 2].by_distance is not None:
+                    st = replace(st, landmark=_by_distance(st.landmark, mine[p // 2].by_distance or 0.0))
+                inner.append(leaf(st, sub[p] + extra[n]))
         else:  # the correction's: drive on with the step's own rows, turn as the person did
             base = old if old.network is None else paper.network.steps[j]
             own = [(e, t) for e, t in whole if e == 0]
@@ -313,14 +432,100 @@ def _ticks(run: SegmentedRun, step_of: Sequence[int], j: int) -> np.ndarray:
     return np.nonzero(np.isin(run.segment_of, segs) & run.informative)[0]
 
 
+def _unique_steps(d: DecisionPoint, base: Step, taken: set[str]) -> list[Step]:
+    """The landmark steps of decision ``d`` inserted before sub-step ``base`` (driving on with its
+    rows, turning with none yet), named apart from ``taken`` (which then holds their names)."""
+    k = 1
+    while True:
+        made = decision_steps(d, base, replace(base, fusion=()), "" if k == 1 else f"-{k}")
+        if not {m.name for m in made} & taken:
+            taken.update(m.name for m in made)
+            return made
+        k += 1
+
+
+def _labelled_parts(
+    views: Sequence[SegmentedRun],
+    others: Sequence[FurtherDemo],
+    step_of: Sequence[Sequence[int]],
+    j: int,
+    old: Step,
+    pos: Sequence[int],
+    slots: Sequence[_Slot],
+    inserted: Sequence[_Inserted],
+    demos: Sequence[int],
+) -> tuple[
+    list[list[tuple[int, np.ndarray]]],
+    list[tuple[list[tuple[int, np.ndarray]], list[tuple[int, np.ndarray]]]],
+]:
+    """The informative ticks of corrections ``demos`` in goal step ``j`` (whose sub-steps are
+    ``old``'s) by the sub-step their network was in: per sub-step, and per inserted decision
+    (drive on to its opening, turn). A person's turn the table's sub-goals also take
+    (``slots``) is that sub-goal's turn, and what follows it the sub-steps after, whatever
+    step the network, having missed it, was in."""
+    assert old.network is not None
+    names = [s.name for s in old.network.steps]
+    extra: list[list[tuple[int, np.ndarray]]] = [[] for _ in names]
+    ins_parts: list[tuple[list[tuple[int, np.ndarray]], list[tuple[int, np.ndarray]]]] = [
+        ([], []) for _ in inserted
+    ]
+    turn_at = {2 * k + 1: n for n, p in enumerate(pos) for k in range(len(slots)) if p == 2 * k + 1}
+    for e in demos:
+        run, demo = views[e], others[e - 1]
+        segs = [s for s, k in zip(run.segments, step_of[e], strict=True) if k == j]
+        if not segs:
+            continue
+        seg = segs[0]
+        where = np.full(len(run.t_ns), -1, dtype=np.int64)  # sub-step index per tick, -1: none
+        for i in range(seg.start, seg.stop):
+            at = _leaf_at(demo, old.name, i)
+            if at in names:
+                where[i] = names.index(at)
+        for k, s in enumerate(slots):  # the table's turns the person took
+            b = s.seen.get(e)
+            if b is None:
+                continue
+            n = turn_at[2 * k + 1]
+            lo = b.begin if b.begin >= 0 else b.onset
+            where[lo : b.turn_end] = n
+            after = where[b.turn_end : seg.stop]
+            after[(after >= 0) & (after <= n)] = min(n + 1, len(names) - 1)
+        tag = np.full(len(run.t_ns), -1, dtype=np.int64)  # per tick: 2q drive / 2q+1 turn of inserted q
+        for q, ins in enumerate(inserted):
+            if ins.demo != e:
+                continue
+            d = ins.decision
+            lo = d.begin if d.begin >= 0 else d.onset
+            tag[d.since : lo] = 2 * q
+            tag[lo : d.turn_end] = 2 * q + 1
+        ticks = np.arange(seg.start, seg.stop)
+        ticks = ticks[run.informative[ticks]]
+        for q in range(len(inserted)):
+            for half in (0, 1):
+                got = ticks[tag[ticks] == 2 * q + half]
+                if len(got):
+                    ins_parts[q][half].append((e, got))
+        rest = ticks[tag[ticks] < 0]
+        for n in range(len(names)):
+            got = rest[where[rest] == n]
+            if len(got):
+                extra[n].append((e, got))
+    return extra, ins_parts
+
+
 def _sub_parts(
-    views: Sequence[SegmentedRun], step_of: Sequence[Sequence[int]], j: int, slots: Sequence[_Slot]
+    views: Sequence[SegmentedRun],
+    step_of: Sequence[Sequence[int]],
+    j: int,
+    slots: Sequence[_Slot],
+    skip: Collection[int] = (),
 ) -> list[list[tuple[int, np.ndarray]]]:
     """Per sub-segment of goal step ``j`` (drive, turn per decision, then the rest) the
-    informative steps of every demo that took each of its decisions (split at its own)."""
+    informative steps of every demo that took each of its decisions (split at its own), but
+    those in ``skip``."""
     out: list[list[tuple[int, np.ndarray]]] = [[] for _ in range(2 * len(slots) + 1)]
     for e, run in enumerate(views):
-        if not all(e in s.seen for s in slots):
+        if e in skip or not all(e in s.seen for s in slots):
             continue  # a demo that did not take every decision of the step cannot be split like it
         segs = [s for s, k in zip(run.segments, step_of[e], strict=True) if k == j]
         for seg in segs[:1]:

@@ -8,16 +8,24 @@ particles (as tests/execute/test_correction_fixes.py), unchecked, keeps it to a 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from lfdfuse import learn as learning
 from lfdfuse.estimate.paper import PFParams
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.estimate.smc import SMCParams
 from lfdfuse.learn import LearnOptions, LearnResult, learn
-from lfdfuse.network.table import named_leaf_steps
+from lfdfuse.network.table import FusionTable, named_leaf_steps
+from lfdfuse.segment.decisions import DecisionPoint
+from lfdfuse.segment.read import SegmentedRun
+from lfdfuse.sources.tasks import Leg
+from lfdfuse.world.model import World
+from lfdfuse.world.parse import parse_world
 
 OPTS = EstimateOptions(seed=0, pf=replace(PFParams(), particles=128), smc=replace(SMCParams(), particles=128))
 #: sub-goals learned from one demo, unchecked
@@ -89,3 +97,134 @@ def test_a_corrections_turn_off_becomes_a_decision_of_a_table_without_one(
         )
         for leaf in (*drive, rest):  # the step's own rows, with the "person's" steps there added
             assert {r.bac for r in base.fusion} <= {r.bac for r in leaf.fusion}
+
+
+def _ring(passage: bool) -> World:
+    """A 22 × 14 m corridor ring, red on its south corridor, green on its north one; with
+    ``passage`` a corridor through the middle joins them (the short way to green)."""
+    outer = [[0, 0], [22, 0], [22, 14], [0, 14], [0, 0]]
+    blocks = (
+        [
+            [[2.4, 2.4], [9.8, 2.4], [9.8, 11.6], [2.4, 11.6], [2.4, 2.4]],
+            [[12.2, 2.4], [19.6, 2.4], [19.6, 11.6], [12.2, 11.6], [12.2, 2.4]],
+        ]
+        if passage
+        else [[[2.4, 2.4], [19.6, 2.4], [19.6, 11.6], [2.4, 11.6], [2.4, 2.4]]]
+    )
+    return parse_world(
+        {
+            "name": "ring-passage" if passage else "ring-closed",
+            "walls": [outer, *blocks],
+            "targets": [
+                {"name": "red", "position": [7.0, 1.2], "radius": 0.25},
+                {"name": "green", "position": [17.0, 12.8], "radius": 0.25},
+            ],
+            "start": [1.5, 1.2, 0.0],
+        }
+    )
+
+
+def test_a_turn_off_one_teacher_took_and_another_passed_by_to_the_goal_is_dropped(tmp_path: Path) -> None:
+    """Two teachers of red then green: one where a passage joins the ring's corridors (it turns
+    into it and out at the top: two decisions), one where it is walled off (round the ring:
+    corners only). Both reached green, so the turns were no choice the task needs: dropped,
+    and the table is the paper's (one step per goal, its rows pooled over both demos as
+    without sub-goals)."""
+    legs = (Leg("red", "keep-center"), Leg("green", "keep-center"))
+    demos = [
+        learning.demonstrate(
+            legs, world=_ring(p), folder=tmp_path, name=n, duration_s=200.0, seed=1
+        ).segmented
+        for p, n in ((True, "passage"), (False, "round"))
+    ]
+    res = learn(demos, options=ALONE)
+    assert res.verdicts and {v.kind for v in res.verdicts} == {"dropped"}
+    assert {v.step for v in res.verdicts} == {"reach-green"}
+    assert all(
+        v.demos == ("passage.seg.mcap",) and "round.seg.mcap passed it by" in v.why for v in res.verdicts
+    )
+    assert res.decisions == ()
+    assert [s.name for s in res.table.network.steps] == ["reach-red", "reach-green"]
+    assert all(s.network is None and s.landmark is None for s in res.table.network.steps)
+    pooled = learn(demos, options=LearnOptions(OPTS)).table  # without sub-goals
+    assert [[(r.bac, r.samples) for r in s.fusion] for s in res.table.network.steps] == [
+        [(r.bac, r.samples) for r in s.fusion] for s in pooled.network.steps
+    ]  # the same rows on the same steps of both demos
+
+
+def _labels(run: SegmentedRun, table: FusionTable, decisions: Sequence[DecisionPoint]) -> tuple[str, ...]:
+    """The network step of every tick of ``run`` as ``table``'s runtime would name it had it
+    driven the teacher's path: each goal step's sub-steps switched where its decisions are."""
+    out: list[str] = []
+    for seg, step in zip(run.segments, table.network.steps, strict=True):
+        names = [step.name] * (seg.stop - seg.start)
+        if step.network is not None:
+            leaves = iter(s.name for s in step.network.steps)
+            at = seg.start
+            for d in (d for d in decisions if d.segment == seg.index):
+                begin = d.begin if d.begin >= 0 else d.onset
+                if not d.at_start:
+                    names[at - seg.start : begin - seg.start] = [f"{step.name}/{next(leaves)}"] * (begin - at)
+                names[begin - seg.start : d.turn_end - seg.start] = [f"{step.name}/{next(leaves)}"] * (
+                    d.turn_end - begin
+                )
+                at = d.turn_end
+            names[at - seg.start :] = [f"{step.name}/{next(leaves)}"] * (seg.stop - at)
+        out += names
+    return tuple(out)
+
+
+def test_a_correction_in_a_sub_step_re_weights_that_sub_step_alone(
+    ring_spur_demo: Path, refined: LearnResult
+) -> None:
+    """The demo read as a correction of its own table with sub-goals in which the person drove
+    only some way past the turn into the spur (the network's sub-step there: the goal step's last,
+    ``reach-green/reach-green``). Known from ``/lfd/step``, the person's ticks re-weight that
+    sub-step's rows; every other row of every step stays bit for bit, the sub-goals too. Not
+    known (a log segmented without it), the correction took none of the step's decisions and
+    teaches nothing."""
+    from lfdfuse.estimate.pooled_subgoals import FurtherDemo, pool_subgoals
+    from lfdfuse.estimate.subgoals import track_of
+    from lfdfuse.segment.read import read_segmented_and_run
+
+    run, raw = read_segmented_and_run(ring_spur_demo)
+    track = track_of(raw, run)
+    paper = learn([ring_spur_demo], options=LearnOptions(OPTS)).table
+    table = refined.table
+    (d,) = [d for d in refined.decisions if table.network.steps[d.segment].name == "reach-green"]
+    seg = run.segments[d.segment]
+    person = np.zeros(len(run.t_ns), dtype=bool)
+    person[d.turn_end + 30 : seg.stop] = True  # past the turn
+    fix = replace(run, informative=run.informative & person)
+    steps = _labels(run, table, refined.decisions)
+    assert {steps[i] for i in np.flatnonzero(person)} == {"reach-green/reach-green"}
+
+    def pooled(known: bool) -> FusionTable:
+        return pool_subgoals(
+            first=run,
+            first_name="demo",
+            paper=paper,
+            table=table,
+            decisions=refined.decisions,
+            others=[FurtherDemo("fix", fix, track, correction=True, steps=steps if known else None)],
+            opts=OPTS,
+        ).table
+
+    assert pooled(False).network == table.network
+    a, b = named_leaf_steps(table), named_leaf_steps(pooled(True))
+    assert [(n, s.landmark) for n, s in a] == [(n, s.landmark) for n, s in b]
+    driven = {int(x) for x in run.bac[np.flatnonzero(fix.informative)]}
+    changed = {
+        (n, r.bac)
+        for (n, s), (_, t) in zip(a, b, strict=True)
+        for r, q in zip(s.fusion, t.fusion, strict=False)
+        if r != q
+    }
+    assert changed and {n for n, _ in changed} == {"reach-green/reach-green"}
+    assert {bac for _, bac in changed} <= driven
+    for (n, s), (_, t) in zip(a, b, strict=True):
+        assert len(s.fusion) == len(t.fusion) or n == "reach-green/reach-green"
+        rows = {r.bac: r for r in t.fusion}
+        for r in s.fusion:
+            q = rows[r.bac]
+            assert q == r or (q.samples_added and q.weights_before == r.weights), (n, r.bac)
