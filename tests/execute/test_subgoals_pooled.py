@@ -9,7 +9,7 @@ particles (as tests/execute/test_correction_fixes.py), unchecked, keeps it to a 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +23,7 @@ from lfdfuse.learn import LearnOptions, LearnResult, learn
 from lfdfuse.network.table import FusionTable, named_leaf_steps
 from lfdfuse.segment.decisions import DecisionPoint
 from lfdfuse.segment.read import SegmentedRun
+from lfdfuse.segment.track import LandmarkTrack
 from lfdfuse.sources.tasks import Leg
 from lfdfuse.world.model import World
 from lfdfuse.world.parse import parse_world
@@ -36,6 +37,24 @@ ALONE = LearnOptions(OPTS, subgoals=True, check_starts=None)
 def refined(ring_spur_demo: Path) -> LearnResult:
     """The ring-spur demo learned alone with sub-goals (both tests compare with it)."""
     return learn([ring_spur_demo], options=ALONE)
+
+
+@dataclass(frozen=True)
+class Read:
+    """The ring-spur demo read with its landmark track, and its paper table (no sub-goals)."""
+
+    run: SegmentedRun
+    track: LandmarkTrack
+    paper: FusionTable
+
+
+@pytest.fixture(scope="module")
+def read(ring_spur_demo: Path) -> Read:
+    from lfdfuse.estimate.subgoals import track_of
+    from lfdfuse.segment.read import read_segmented_and_run
+
+    run, raw = read_segmented_and_run(ring_spur_demo)
+    return Read(run, track_of(raw, run), learn([ring_spur_demo], options=LearnOptions(OPTS)).table)
 
 
 def test_a_demo_pooled_with_itself_merges_every_decision_and_doubles_every_sub_step(
@@ -59,19 +78,15 @@ def test_a_demo_pooled_with_itself_merges_every_decision_and_doubles_every_sub_s
 
 
 def test_a_corrections_turn_off_becomes_a_decision_of_a_table_without_one(
-    ring_spur_demo: Path, refined: LearnResult
+    read: Read, refined: LearnResult
 ) -> None:
     """The demo read as a correction of its own paper table (no sub-goals): every turn-off the
     sub-goal refinement finds in it is added to its goal step — drive on with the step's own
     rows, turn with the demo's turn alone, then the step's own rows again — each landmark as
     the refinement writes it."""
     from lfdfuse.estimate.pooled_subgoals import FurtherDemo, pool_subgoals
-    from lfdfuse.estimate.subgoals import track_of
-    from lfdfuse.segment.read import read_segmented_and_run
 
-    run, raw = read_segmented_and_run(ring_spur_demo)
-    track = track_of(raw, run)
-    paper = learn([ring_spur_demo], options=LearnOptions(OPTS)).table
+    run, track, paper = read.run, read.track, read.paper
     res = pool_subgoals(
         first=run,
         first_name="demo",
@@ -174,9 +189,7 @@ def _labels(run: SegmentedRun, table: FusionTable, decisions: Sequence[DecisionP
     return tuple(out)
 
 
-def test_a_correction_in_a_sub_step_re_weights_that_sub_step_alone(
-    ring_spur_demo: Path, refined: LearnResult
-) -> None:
+def test_a_correction_in_a_sub_step_re_weights_that_sub_step_alone(read: Read, refined: LearnResult) -> None:
     """The demo read as a correction of its own table with sub-goals in which the person drove
     only some way past the turn into the spur (the network's sub-step there: the goal step's last,
     ``reach-green/reach-green``). Known from ``/lfd/step``, the person's ticks re-weight that
@@ -184,12 +197,8 @@ def test_a_correction_in_a_sub_step_re_weights_that_sub_step_alone(
     known (a log segmented without it), the correction took none of the step's decisions and
     teaches nothing."""
     from lfdfuse.estimate.pooled_subgoals import FurtherDemo, pool_subgoals
-    from lfdfuse.estimate.subgoals import track_of
-    from lfdfuse.segment.read import read_segmented_and_run
 
-    run, raw = read_segmented_and_run(ring_spur_demo)
-    track = track_of(raw, run)
-    paper = learn([ring_spur_demo], options=LearnOptions(OPTS)).table
+    run, track, paper = read.run, read.track, read.paper
     table = refined.table
     (d,) = [d for d in refined.decisions if table.network.steps[d.segment].name == "reach-green"]
     seg = run.segments[d.segment]
