@@ -116,6 +116,27 @@ class _Slot:
     by_distance: float | None = None  # merged from a correction: the window of a distance landmark
 
 
+def goals_once(run: SegmentedRun) -> SegmentedRun:
+    """A correction's run with each goal met once: a goal met again right after it was met (the
+    robot lingering at it, its network already after the next goal) starts no goal segment; its
+    steps belong to the segment after (None: the run ended there)."""
+    segs: list[GoalSegment] = []
+    start, last = 0, None
+    for seg in run.segments:
+        if seg.goal is not None and seg.goal == last:
+            continue  # met again: on into the next segment
+        segs.append(GoalSegment(len(segs), start, seg.stop, seg.goal))
+        start, last = seg.stop, (seg.goal if seg.goal is not None else last)
+    if start < len(run.t_ns):
+        segs.append(GoalSegment(len(segs), start, len(run.t_ns), None))
+    if len(segs) == len(run.segments):
+        return run
+    seg_of = np.empty_like(run.segment_of)
+    for g in segs:
+        seg_of[g.start : g.stop] = g.index
+    return replace(run, segments=tuple(segs), segment_of=seg_of)
+
+
 @dataclass(frozen=True)
 class _Inserted:
     """A correction's decision inside one sub-step of a goal step with sub-goals: ``decision``
@@ -205,6 +226,7 @@ def pool_subgoals(
     """``table`` (the first demo's with sub-goals, ``decisions`` its decision points; ``paper``
     the first demo's table without) with the further demos' decisions matched, added or dropped
     and the rows they drive in pooled (see the module docstring)."""
+    others = [replace(o, run=goals_once(o.run)) if o.correction else o for o in others]
     runs = [first, *(o.run for o in others)]
     al = align(runs)
     n = len(first.segments)
