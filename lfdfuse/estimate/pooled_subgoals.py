@@ -129,7 +129,7 @@ def goals_once(run: SegmentedRun) -> SegmentedRun:
         start, last = seg.stop, (seg.goal if seg.goal is not None else last)
     if start < len(run.t_ns):
         segs.append(GoalSegment(len(segs), start, len(run.t_ns), None))
-    if len(segs) == len(run.segments):
+    if tuple(segs) == run.segments:
         return run
     seg_of = np.empty_like(run.segment_of)
     for g in segs:
