@@ -23,7 +23,8 @@ from pathlib import Path
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.demo_alignment import same_behaviors
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run, estimate_runs
-from lfdfuse.estimate.pooled_subgoals import FurtherDemo, Verdict, pool_subgoals
+from lfdfuse.estimate.pooled_subgoals import Verdict, pool_subgoals
+from lfdfuse.estimate.sub_step_corrections import FurtherDemo
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.check import CHECK_STARTS, DemoWorld, demo_world
 from lfdfuse.execute.repair import Amends, Repair, repair

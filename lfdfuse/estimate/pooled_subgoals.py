@@ -17,7 +17,10 @@ person's correction (a ``teleop --table`` log: only the person's ticks are infor
   sub-goals led elsewhere has them *replaced* by the person's). A correction's decision that
   matches one of the table's was missed by the network from the correction's start: it is
   merged and recognised by distance (the first opening on its side past a window that holds
-  both demos' places) instead of by count.
+  both demos' places) instead of by count. In a goal step that has sub-goals, a correction that
+  kept its network's step (``/lfd/step``) is learned in the sub-step its network was in: its
+  ticks re-weight that sub-step, its turn-offs become decisions there
+  (:mod:`lfdfuse.estimate.sub_step_corrections`); without it, a turn-off replaces the step's.
 * **Rows**: every leaf step keeps its rows; a row another demo adds informative steps to is
   estimated again on the pooled steps (the product over the demos, as
   :mod:`lfdfuse.estimate.pooled_estimate` does) on its own random stream, so a row nobody
@@ -37,14 +40,20 @@ from lfdfuse.estimate.baselines import angle_errors
 from lfdfuse.estimate.commands import Commands, commands_of
 from lfdfuse.estimate.demo_alignment import align, problem_of, row_rng
 from lfdfuse.estimate.methods import EstimateOptions, estimate_groups
-from lfdfuse.estimate.replay import fused_vectors
+from lfdfuse.estimate.sub_step_corrections import (
+    FurtherDemo,
+    Inserted,
+    decisions_of,
+    goals_once,
+    inside_decision,
+    labelled_parts,
+    unique_steps,
+)
 from lfdfuse.estimate.subgoals import decision_steps
 from lfdfuse.network.landmark_goals import Landmark, OpeningCount
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step
-from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, find_decisions, split_segments
-from lfdfuse.segment.goals import GoalSegment
+from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, split_segments
 from lfdfuse.segment.read import SegmentedRun
-from lfdfuse.segment.track import LandmarkTrack
 
 #: a row of a sub-step pooled over demos draws from ``row_rng(seed, SUBSTEP, leaf, bac)``
 SUBSTEP = 2
@@ -54,20 +63,6 @@ MATCH_SHARE = 0.3
 MATCH_MIN_M = 1.5
 #: ... and their turns by at most this
 MATCH_TURN_RAD = math.radians(45.0)
-
-
-@dataclass(frozen=True)
-class FurtherDemo:
-    """A demo after the first: its segmented run, its landmark track, and whether it is a
-    person's correction of a network (its network's ticks non-informative)."""
-
-    name: str
-    run: SegmentedRun
-    track: LandmarkTrack
-    correction: bool
-    #: a correction: the network's active step at each of its ticks (``/lfd/step``, nested names
-    #: joined by ``/``), where the log kept it; None: not known
-    steps: tuple[str | None, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -116,102 +111,6 @@ class _Slot:
     by_distance: float | None = None  # merged from a correction: the window of a distance landmark
 
 
-def goals_once(run: SegmentedRun) -> SegmentedRun:
-    """A correction's run with each goal met once: a goal met again right after it was met (the
-    robot lingering at it, its network already after the next goal) starts no goal segment; its
-    steps belong to the segment after (None: the run ended there)."""
-    segs: list[GoalSegment] = []
-    start, last = 0, None
-    for seg in run.segments:
-        if seg.goal is not None and seg.goal == last:
-            continue  # met again: on into the next segment
-        segs.append(GoalSegment(len(segs), start, seg.stop, seg.goal))
-        start, last = seg.stop, (seg.goal if seg.goal is not None else last)
-    if start < len(run.t_ns):
-        segs.append(GoalSegment(len(segs), start, len(run.t_ns), None))
-    if tuple(segs) == run.segments:
-        return run
-    seg_of = np.empty_like(run.segment_of)
-    for g in segs:
-        seg_of[g.start : g.stop] = g.index
-    return replace(run, segments=tuple(segs), segment_of=seg_of)
-
-
-@dataclass(frozen=True)
-class _Inserted:
-    """A correction's decision inside one sub-step of a goal step with sub-goals: ``decision``
-    counted from where the network entered sub-step ``leaf`` (its name in the goal step's
-    network) in correction ``demo``."""
-
-    leaf: str
-    decision: DecisionPoint
-    demo: int
-
-
-def decisions_of(
-    demo: FurtherDemo,
-    paper: FusionTable,
-    step_of: Sequence[int],
-    params: DecisionParams,
-    segments: tuple[GoalSegment, ...] | None = None,
-) -> list[DecisionPoint]:
-    """Decision points of a further demo, the first demo's paper table replayed on its steps
-    (``segments``: of these spans of its goal segments instead)."""
-    run = demo.run
-    mapped = replace(run, segment_of=np.asarray(step_of, dtype=np.int64)[run.segment_of])
-    fused = fused_vectors(paper, mapped, np.arange(len(run.t_ns)))
-    return find_decisions(
-        segments=run.segments if segments is None else segments,
-        demo=run.demo,
-        informative=run.informative,
-        fused=fused,
-        track=demo.track,
-        params=params,
-    )
-
-
-def _leaf_at(demo: FurtherDemo, step: str, i: int) -> str | None:
-    """The sub-step of goal step ``step`` the network of correction ``demo`` was in at tick
-    ``i`` (its name in the goal step's network), or None (no steps kept, or another step)."""
-    if demo.steps is None:
-        return None
-    at = demo.steps[i]
-    if at is None or not at.startswith(step + "/"):
-        return None
-    return at[len(step) + 1 :].split("/", 1)[0]
-
-
-def _leaf_since(demo: FurtherDemo, step: str, leaf: str, i: int, lo: int) -> int:
-    """The tick (at least ``lo``) the network of ``demo`` entered sub-step ``leaf`` of ``step``
-    that it was in at tick ``i``: where its landmarks count from."""
-    while i > lo and _leaf_at(demo, step, i - 1) == leaf:
-        i -= 1
-    return i
-
-
-def _inside(
-    demo: FurtherDemo,
-    e: int,
-    b: DecisionPoint,
-    step: Step,
-    seg: GoalSegment,
-    paper: FusionTable,
-    step_of: Sequence[int],
-    params: DecisionParams,
-) -> _Inserted | None:
-    """Correction ``demo``'s decision ``b`` as a decision of the sub-step its network was in when
-    the turn began, its landmark counted from where the network entered that sub-step (found
-    again from there); None when the network's step there is not one of ``step``'s."""
-    at = b.begin if b.begin >= 0 else b.onset
-    leaf = _leaf_at(demo, step.name, at)
-    if leaf is None or step.network is None or leaf not in {s.name for s in step.network.steps}:
-        return None
-    since = _leaf_since(demo, step.name, leaf, at, seg.start)
-    again = decisions_of(demo, paper, step_of, params, (GoalSegment(seg.index, since, seg.stop, seg.goal),))
-    mine = next((d for d in again if d.side == b.side and abs(d.onset - b.onset) <= params.lookback), None)
-    return None if mine is None else _Inserted(leaf, mine, e)
-
-
 def pool_subgoals(
     *,
     first: SegmentedRun,
@@ -247,7 +146,7 @@ def pool_subgoals(
     dropped: set[int] = set()  # goal steps back to the paper's step
     replaced: dict[int, int] = {}  # goal step -> the correction whose decisions it takes
     labelled: dict[int, set[int]] = {}  # goal step -> corrections whose ticks go by the network's sub-step
-    inserted: dict[int, list[_Inserted]] = {}  # goal step -> corrections' decisions inside its sub-steps
+    inserted: dict[int, list[Inserted]] = {}  # goal step -> corrections' decisions inside its sub-steps
     for e, demo in enumerate(others, start=1):
         found = decisions_of(demo, paper, al.step_of[e], params)
         for j in goal_steps:
@@ -277,7 +176,8 @@ def pool_subgoals(
                     # the network's sub-step is known: a turn-off of the person's is a decision
                     # of the sub-step the network was in, the other ticks re-weight theirs
                     got = [
-                        _inside(demo, e, b, step, segs[0], paper, al.step_of[e], params) for b in unmatched
+                        inside_decision(demo, e, b, step, segs[0], paper, al.step_of[e], params)
+                        for b in unmatched
                     ]
                     if all(g is not None for g in got):
                         labelled.setdefault(j, set()).add(e)
@@ -372,7 +272,7 @@ def _build(
     opts: EstimateOptions,
     names: Sequence[str],
     labelled: dict[int, set[int]],
-    inserted: dict[int, list[_Inserted]],
+    inserted: dict[int, list[Inserted]],
 ) -> FusionTable:
     """The table with each goal step's final sub-goals (``slots``), every leaf's rows pooled;
     ``labelled``: per goal step the corrections whose ticks go to the sub-step the network was
@@ -415,15 +315,15 @@ def _build(
                 (i for i in inserted.get(j, []) if i.demo in by_step),
                 key=lambda i: (i.demo, i.decision.onset),
             )
-            extra, ins_parts = _labelled_parts(
-                views, others, step_of, j, old, pos, mine, mine_ins, sorted(by_step)
+            extra, ins_parts = labelled_parts(
+                views, others, step_of, j, old, pos, [s.seen for s in mine], mine_ins, sorted(by_step)
             )
             taken = {st.name for st in olds}
             for n, (st, p) in enumerate(zip(olds, pos, strict=True)):
                 for q, ins in enumerate(mine_ins):
                     if ins.leaf != st.name:
                         continue
-                    made = _unique_steps(ins.decision, st, taken)
+                    made = unique_steps(ins.decision, st, taken)
                     drive_parts, turn_parts = ins_parts[q]
                     if not ins.decision.at_start:
                         inner.append(leaf(made[0], sub[p] + drive_parts))
@@ -452,87 +352,6 @@ def _ticks(run: SegmentedRun, step_of: Sequence[int], j: int) -> np.ndarray:
     """The informative steps of ``run`` in its goal segments matched to network step ``j``."""
     segs = [s.index for s, k in zip(run.segments, step_of, strict=True) if k == j]
     return np.nonzero(np.isin(run.segment_of, segs) & run.informative)[0]
-
-
-def _unique_steps(d: DecisionPoint, base: Step, taken: set[str]) -> list[Step]:
-    """The landmark steps of decision ``d`` inserted before sub-step ``base`` (driving on with its
-    rows, turning with none yet), named apart from ``taken`` (which then holds their names)."""
-    k = 1
-    while True:
-        made = decision_steps(d, base, replace(base, fusion=()), "" if k == 1 else f"-{k}")
-        if not {m.name for m in made} & taken:
-            taken.update(m.name for m in made)
-            return made
-        k += 1
-
-
-def _labelled_parts(
-    views: Sequence[SegmentedRun],
-    others: Sequence[FurtherDemo],
-    step_of: Sequence[Sequence[int]],
-    j: int,
-    old: Step,
-    pos: Sequence[int],
-    slots: Sequence[_Slot],
-    inserted: Sequence[_Inserted],
-    demos: Sequence[int],
-) -> tuple[
-    list[list[tuple[int, np.ndarray]]],
-    list[tuple[list[tuple[int, np.ndarray]], list[tuple[int, np.ndarray]]]],
-]:
-    """The informative ticks of corrections ``demos`` in goal step ``j`` (whose sub-steps are
-    ``old``'s) by the sub-step their network was in: per sub-step, and per inserted decision
-    (drive on to its opening, turn). A person's turn the table's sub-goals also take
-    (``slots``) is that sub-goal's turn, and what follows it the sub-steps after, whatever
-    step the network, having missed it, was in."""
-    assert old.network is not None
-    names = [s.name for s in old.network.steps]
-    extra: list[list[tuple[int, np.ndarray]]] = [[] for _ in names]
-    ins_parts: list[tuple[list[tuple[int, np.ndarray]], list[tuple[int, np.ndarray]]]] = [
-        ([], []) for _ in inserted
-    ]
-    turn_at = {2 * k + 1: n for n, p in enumerate(pos) for k in range(len(slots)) if p == 2 * k + 1}
-    for e in demos:
-        run, demo = views[e], others[e - 1]
-        segs = [s for s, k in zip(run.segments, step_of[e], strict=True) if k == j]
-        if not segs:
-            continue
-        seg = segs[0]
-        where = np.full(len(run.t_ns), -1, dtype=np.int64)  # sub-step index per tick, -1: none
-        for i in range(seg.start, seg.stop):
-            at = _leaf_at(demo, old.name, i)
-            if at in names:
-                where[i] = names.index(at)
-        for k, s in enumerate(slots):  # the table's turns the person took
-            b = s.seen.get(e)
-            if b is None:
-                continue
-            n = turn_at[2 * k + 1]
-            lo = b.begin if b.begin >= 0 else b.onset
-            where[lo : b.turn_end] = n
-            after = where[b.turn_end : seg.stop]
-            after[(after >= 0) & (after <= n)] = min(n + 1, len(names) - 1)
-        tag = np.full(len(run.t_ns), -1, dtype=np.int64)  # per tick: 2q drive / 2q+1 turn of inserted q
-        for q, ins in enumerate(inserted):
-            if ins.demo != e:
-                continue
-            d = ins.decision
-            lo = d.begin if d.begin >= 0 else d.onset
-            tag[d.since : lo] = 2 * q
-            tag[lo : d.turn_end] = 2 * q + 1
-        ticks = np.arange(seg.start, seg.stop)
-        ticks = ticks[run.informative[ticks]]
-        for q in range(len(inserted)):
-            for half in (0, 1):
-                got = ticks[tag[ticks] == 2 * q + half]
-                if len(got):
-                    ins_parts[q][half].append((e, got))
-        rest = ticks[tag[ticks] < 0]
-        for n in range(len(names)):
-            got = rest[where[rest] == n]
-            if len(got):
-                extra[n].append((e, got))
-    return extra, ins_parts
 
 
 def _sub_parts(

@@ -8,7 +8,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from lfdfuse.estimate.pooled_subgoals import Verdict, goals_once, same_place
+from lfdfuse.estimate.pooled_subgoals import Verdict, same_place
+from lfdfuse.estimate.sub_step_corrections import goals_once
 from lfdfuse.network.changes import step_changes
 from lfdfuse.network.landmark_goals import Landmark
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step

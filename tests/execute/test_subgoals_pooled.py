@@ -84,7 +84,8 @@ def test_a_corrections_turn_off_becomes_a_decision_of_a_table_without_one(
     sub-goal refinement finds in it is added to its goal step — drive on with the step's own
     rows, turn with the demo's turn alone, then the step's own rows again — each landmark as
     the refinement writes it."""
-    from lfdfuse.estimate.pooled_subgoals import FurtherDemo, pool_subgoals
+    from lfdfuse.estimate.pooled_subgoals import pool_subgoals
+    from lfdfuse.estimate.sub_step_corrections import FurtherDemo
 
     run, track, paper = read.run, read.track, read.paper
     res = pool_subgoals(
@@ -196,7 +197,8 @@ def test_a_correction_in_a_sub_step_re_weights_that_sub_step_alone(read: Read, r
     sub-step's rows; every other row of every step stays bit for bit, the sub-goals too. Not
     known (a log segmented without it), the correction took none of the step's decisions and
     teaches nothing."""
-    from lfdfuse.estimate.pooled_subgoals import FurtherDemo, pool_subgoals
+    from lfdfuse.estimate.pooled_subgoals import pool_subgoals
+    from lfdfuse.estimate.sub_step_corrections import FurtherDemo
 
     run, track, paper = read.run, read.track, read.paper
     table = refined.table
@@ -237,3 +239,59 @@ def test_a_correction_in_a_sub_step_re_weights_that_sub_step_alone(read: Read, r
         for r in s.fusion:
             q = rows[r.bac]
             assert q == r or (q.samples_added and q.weights_before == r.weights), (n, r.bac)
+
+
+def test_a_corrections_turn_off_inside_a_sub_step_becomes_a_decision_of_that_sub_step(
+    read: Read, refined: LearnResult
+) -> None:
+    """The demo as a correction of its own table with sub-goals whose reach-green decision is
+    put 30 m farther on (so the teacher's turn into the spur is none of the table's), its
+    network (``/lfd/step``) already in the goal step's last sub-step throughout reach-green: the
+    person's turn becomes a decision of that sub-step, its landmark counted from where the
+    network entered it — the demo's own, since that is reach-green's start — and inserted before
+    it; the table's sub-goals and every row the person did not drive stay bit for bit."""
+    from lfdfuse.estimate.pooled_subgoals import pool_subgoals
+    from lfdfuse.estimate.sub_step_corrections import FurtherDemo
+
+    run, track, paper, table = read.run, read.track, read.paper, refined.table
+    (d,) = [d for d in refined.decisions if table.network.steps[d.segment].name == "reach-green"]
+    far = replace(d, odometry_m=d.odometry_m + 30.0)
+    decisions = tuple(far if x == d else x for x in refined.decisions)
+    seg = run.segments[d.segment]
+    steps = list(_labels(run, table, refined.decisions))
+    steps[seg.start : seg.stop] = ["reach-green/reach-green"] * (seg.stop - seg.start)
+    person = np.zeros(len(run.t_ns), dtype=bool)
+    person[seg.start : seg.stop] = True
+    fix = replace(run, informative=run.informative & person)
+    res = pool_subgoals(
+        first=run,
+        first_name="demo",
+        paper=paper,
+        table=table,
+        decisions=decisions,
+        others=[FurtherDemo("fix", fix, track, correction=True, steps=tuple(steps))],
+        opts=OPTS,
+    )
+    (added,) = [v for v in res.verdicts if v.kind == "added"]
+    assert added.step == "reach-green/reach-green" and added.demos == ("fix",)
+    got = added.decision
+    assert (got.side, got.nth, got.since, got.onset, got.odometry_m) == (
+        d.side,
+        d.nth,
+        d.since,
+        d.onset,
+        d.odometry_m,
+    )
+    before = dict(named_leaf_steps(table))
+    after = dict(named_leaf_steps(res.table))
+    new = [n for n in after if n not in before]
+    assert new == ["reach-green/to-left-opening-1-2", "reach-green/turn-left-2"]
+    names = [n for n, _ in named_leaf_steps(res.table)]
+    assert names.index(new[1]) + 1 == names.index("reach-green/reach-green")  # right before that sub-step
+    assert after[new[0]].landmark == before["reach-green/to-left-opening-1"].landmark
+    turn = after[new[1]]
+    assert turn.fusion and all(r.weights_before is None and r.samples_added == r.samples for r in turn.fusion)
+    for n, s in before.items():  # the table's sub-goals as they were; rows only where the person drove
+        assert after[n].landmark == s.landmark, n
+        if not n.startswith("reach-green/reach-green"):
+            assert after[n] == s, n
