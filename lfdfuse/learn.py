@@ -23,7 +23,8 @@ from pathlib import Path
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.demo_alignment import same_behaviors
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run, estimate_runs
-from lfdfuse.estimate.pooled_subgoals import FurtherDemo, Verdict, pool_subgoals
+from lfdfuse.estimate.pooled_subgoals import Verdict, pool_subgoals
+from lfdfuse.estimate.sub_step_corrections import FurtherDemo
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.check import CHECK_STARTS, DemoWorld, demo_world
 from lfdfuse.execute.repair import Amends, Repair, repair
@@ -35,7 +36,7 @@ from lfdfuse.progress import Progress, part, tell
 from lfdfuse.robot.pose import Pose
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
 from lfdfuse.segment.pipeline import segment_file
-from lfdfuse.segment.read import SegmentedRun, read_segmented, read_segmented_and_run
+from lfdfuse.segment.read import SegmentedRun, network_steps, read_segmented, read_segmented_and_run
 from lfdfuse.segment.track import LandmarkTrack
 from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import Leg
@@ -222,7 +223,13 @@ def _learn_subgoals_pooled(
     then = part(progress, start=0.4, size=0.4, total=1.0)
     table, decisions, fixed = _with_subgoals(paper, run, track, home_of(raw, run), options, then)
     others = [
-        FurtherDemo(name, r, track_of(w, r, source=str(src)), CORRECTION_KEY in r.metadata)
+        FurtherDemo(
+            name,
+            r,
+            track_of(w, r, source=str(src)),
+            CORRECTION_KEY in r.metadata,
+            network_steps(src, r.t_ns) if CORRECTION_KEY in r.metadata else None,
+        )
         for name, src, (r, w) in zip(names[1:], demos[1:], read[1:], strict=True)
     ]
     res = pool_subgoals(

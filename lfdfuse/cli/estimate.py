@@ -62,7 +62,7 @@ def estimate_cmd(
         "--subgoals",
         help="Turn-offs the teacher took into an opening (a spur, a room) become landmark sub-goal steps;"
         " with several demos, decisions are matched across them (a correction's turn into an opening the"
-        " network passed by becomes one).",
+        " network passed by becomes one, inside the sub-step its network was in).",
     ),
     commands: CommandChoice = typer.Option(
         CommandChoice.AUTO,

@@ -17,7 +17,10 @@ person's correction (a ``teleop --table`` log: only the person's ticks are infor
   sub-goals led elsewhere has them *replaced* by the person's). A correction's decision that
   matches one of the table's was missed by the network from the correction's start: it is
   merged and recognised by distance (the first opening on its side past a window that holds
-  both demos' places) instead of by count.
+  both demos' places) instead of by count. In a goal step that has sub-goals, a correction that
+  kept its network's step (``/lfd/step``) is learned in the sub-step its network was in: its
+  ticks re-weight that sub-step, its turn-offs become decisions there
+  (:mod:`lfdfuse.estimate.sub_step_corrections`); without it, a turn-off replaces the step's.
 * **Rows**: every leaf step keeps its rows; a row another demo adds informative steps to is
   estimated again on the pooled steps (the product over the demos, as
   :mod:`lfdfuse.estimate.pooled_estimate` does) on its own random stream, so a row nobody
@@ -27,7 +30,7 @@ person's correction (a ``teleop --table`` log: only the person's ticks are infor
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -37,13 +40,20 @@ from lfdfuse.estimate.baselines import angle_errors
 from lfdfuse.estimate.commands import Commands, commands_of
 from lfdfuse.estimate.demo_alignment import align, problem_of, row_rng
 from lfdfuse.estimate.methods import EstimateOptions, estimate_groups
-from lfdfuse.estimate.replay import fused_vectors
+from lfdfuse.estimate.sub_step_corrections import (
+    FurtherDemo,
+    Inserted,
+    decisions_of,
+    goals_once,
+    inside_decision,
+    labelled_parts,
+    unique_steps,
+)
 from lfdfuse.estimate.subgoals import decision_steps
 from lfdfuse.network.landmark_goals import Landmark, OpeningCount
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step
-from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, find_decisions, split_segments
+from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, split_segments
 from lfdfuse.segment.read import SegmentedRun
-from lfdfuse.segment.track import LandmarkTrack
 
 #: a row of a sub-step pooled over demos draws from ``row_rng(seed, SUBSTEP, leaf, bac)``
 SUBSTEP = 2
@@ -53,17 +63,6 @@ MATCH_SHARE = 0.3
 MATCH_MIN_M = 1.5
 #: ... and their turns by at most this
 MATCH_TURN_RAD = math.radians(45.0)
-
-
-@dataclass(frozen=True)
-class FurtherDemo:
-    """A demo after the first: its segmented run, its landmark track, and whether it is a
-    person's correction of a network (its network's ticks non-informative)."""
-
-    name: str
-    run: SegmentedRun
-    track: LandmarkTrack
-    correction: bool
 
 
 @dataclass(frozen=True)
@@ -112,23 +111,6 @@ class _Slot:
     by_distance: float | None = None  # merged from a correction: the window of a distance landmark
 
 
-def decisions_of(
-    demo: FurtherDemo, paper: FusionTable, step_of: Sequence[int], params: DecisionParams
-) -> list[DecisionPoint]:
-    """Decision points of a further demo, the first demo's paper table replayed on its steps."""
-    run = demo.run
-    mapped = replace(run, segment_of=np.asarray(step_of, dtype=np.int64)[run.segment_of])
-    fused = fused_vectors(paper, mapped, np.arange(len(run.t_ns)))
-    return find_decisions(
-        segments=run.segments,
-        demo=run.demo,
-        informative=run.informative,
-        fused=fused,
-        track=demo.track,
-        params=params,
-    )
-
-
 def pool_subgoals(
     *,
     first: SegmentedRun,
@@ -143,6 +125,7 @@ def pool_subgoals(
     """``table`` (the first demo's with sub-goals, ``decisions`` its decision points; ``paper``
     the first demo's table without) with the further demos' decisions matched, added or dropped
     and the rows they drive in pooled (see the module docstring)."""
+    others = [replace(o, run=goals_once(o.run)) if o.correction else o for o in others]
     runs = [first, *(o.run for o in others)]
     al = align(runs)
     n = len(first.segments)
@@ -162,6 +145,8 @@ def pool_subgoals(
     verdicts: list[Verdict] = []
     dropped: set[int] = set()  # goal steps back to the paper's step
     replaced: dict[int, int] = {}  # goal step -> the correction whose decisions it takes
+    labelled: dict[int, set[int]] = {}  # goal step -> corrections whose ticks go by the network's sub-step
+    inserted: dict[int, list[Inserted]] = {}  # goal step -> corrections' decisions inside its sub-steps
     for e, demo in enumerate(others, start=1):
         found = decisions_of(demo, paper, al.step_of[e], params)
         for j in goal_steps:
@@ -186,6 +171,18 @@ def pool_subgoals(
                         abs(a.odometry_m - b.odometry_m) + params.within_min_m,
                     )
             if demo.correction:
+                step = table.network.steps[j]
+                if demo.steps is not None and step.network is not None and j not in replaced and segs:
+                    # the network's sub-step is known: a turn-off of the person's is a decision
+                    # of the sub-step the network was in, the other ticks re-weight theirs
+                    got = [
+                        inside_decision(demo, e, b, step, segs[0], paper, al.step_of[e], params)
+                        for b in unmatched
+                    ]
+                    if all(g is not None for g in got):
+                        labelled.setdefault(j, set()).add(e)
+                        inserted.setdefault(j, []).extend(g for g in got if g is not None)
+                        continue
                 if unmatched:
                     replaced[j] = e
                     slots[j] = [_Slot(b, e, {e: b}) for b in mine]
@@ -237,7 +234,30 @@ def pool_subgoals(
             else:
                 kind, why = "kept", "only the first demo took it; no other passed it by to the goal"
             verdicts.append(Verdict(kind, step_names[j], s.decision, took, why))
-    built = _build(first, paper, table, others, al.step_of, out_slots, opts, names)
+        if j in dropped and j not in replaced:
+            continue
+        for ins in inserted.get(j, []):
+            verdicts.append(
+                Verdict(
+                    "added",
+                    f"{step_names[j]}/{ins.leaf}",
+                    ins.decision,
+                    (names[ins.demo],),
+                    "the person turned off where the network, in this sub-step, drove on",
+                )
+            )
+    built = _build(
+        first,
+        paper,
+        table,
+        others,
+        al.step_of,
+        out_slots,
+        opts,
+        names,
+        {j: v for j, v in labelled.items() if j not in dropped or j in replaced},
+        inserted,
+    )
     kept = tuple(s.decision for j in goal_steps for s in out_slots[j] if s.source == 0)
     return PooledSubgoals(built, tuple(verdicts), kept)
 
@@ -251,8 +271,12 @@ def _build(
     slots: dict[int, list[_Slot]],
     opts: EstimateOptions,
     names: Sequence[str],
+    labelled: dict[int, set[int]],
+    inserted: dict[int, list[Inserted]],
 ) -> FusionTable:
-    """The table with each goal step's final sub-goals (``slots``), every leaf's rows pooled."""
+    """The table with each goal step's final sub-goals (``slots``), every leaf's rows pooled;
+    ``labelled``: per goal step the corrections whose ticks go to the sub-step the network was
+    in, ``inserted`` their decisions inside sub-steps."""
     runs = [first, *(o.run for o in others)]
     models = [
         commands_of(run, requested=opts.commands, recheck_s=opts.model.recheck_s, nudge_s=opts.model.nudge_s)
@@ -277,19 +301,36 @@ def _build(
             # a tour, a goal step without sub-goals, or one whose sub-goals were dropped (the paper's)
             built.append(leaf(old if mine is None or old.network is None else paper.network.steps[j], whole))
             continue
-        sub = _sub_parts(views, step_of, j, mine)
+        by_step = labelled.get(j, set()) if all(s.source == 0 for s in mine) else set()
+        sub = _sub_parts(views, step_of, j, mine, skip=by_step)
         inner: list[Step] = []
         if all(s.source == 0 for s in mine):  # the table's sub-goals, matched in other demos
             assert old.network is not None
-            olds = iter(old.network.steps)
+            olds = list(old.network.steps)
+            pos: list[int] = []  # each sub-step's sub-segment
             for k, s in enumerate(mine):
-                if not s.decision.at_start:
-                    drive = next(olds)
-                    if s.by_distance is not None:
-                        drive = replace(drive, landmark=_by_distance(drive.landmark, s.by_distance))
-                    inner.append(leaf(drive, sub[2 * k]))
-                inner.append(leaf(next(olds), sub[2 * k + 1]))
-            inner.append(leaf(next(olds), sub[-1]))
+                pos += [2 * k, 2 * k + 1] if not s.decision.at_start else [2 * k + 1]
+            pos.append(2 * len(mine))
+            mine_ins = sorted(
+                (i for i in inserted.get(j, []) if i.demo in by_step),
+                key=lambda i: (i.demo, i.decision.onset),
+            )
+            extra, ins_parts = labelled_parts(
+                views, others, step_of, j, old, pos, [s.seen for s in mine], mine_ins, sorted(by_step)
+            )
+            taken = {st.name for st in olds}
+            for n, (st, p) in enumerate(zip(olds, pos, strict=True)):
+                for q, ins in enumerate(mine_ins):
+                    if ins.leaf != st.name:
+                        continue
+                    made = unique_steps(ins.decision, st, taken)
+                    drive_parts, turn_parts = ins_parts[q]
+                    if not ins.decision.at_start:
+                        inner.append(leaf(made[0], sub[p] + drive_parts))
+                    inner.append(leaf(made[-1], turn_parts))
+                if p % 2 == 0 and p < 2 * len(mine) and mine[p // 2].by_distance is not None:
+                    st = replace(st, landmark=_by_distance(st.landmark, mine[p // 2].by_distance or 0.0))
+                inner.append(leaf(st, sub[p] + extra[n]))
         else:  # the correction's: drive on with the step's own rows, turn as the person did
             base = old if old.network is None else paper.network.steps[j]
             own = [(e, t) for e, t in whole if e == 0]
@@ -314,13 +355,18 @@ def _ticks(run: SegmentedRun, step_of: Sequence[int], j: int) -> np.ndarray:
 
 
 def _sub_parts(
-    views: Sequence[SegmentedRun], step_of: Sequence[Sequence[int]], j: int, slots: Sequence[_Slot]
+    views: Sequence[SegmentedRun],
+    step_of: Sequence[Sequence[int]],
+    j: int,
+    slots: Sequence[_Slot],
+    skip: Collection[int] = (),
 ) -> list[list[tuple[int, np.ndarray]]]:
     """Per sub-segment of goal step ``j`` (drive, turn per decision, then the rest) the
-    informative steps of every demo that took each of its decisions (split at its own)."""
+    informative steps of every demo that took each of its decisions (split at its own), but
+    those in ``skip``."""
     out: list[list[tuple[int, np.ndarray]]] = [[] for _ in range(2 * len(slots) + 1)]
     for e, run in enumerate(views):
-        if not all(e in s.seen for s in slots):
+        if e in skip or not all(e in s.seen for s in slots):
             continue  # a demo that did not take every decision of the step cannot be split like it
         segs = [s for s, k in zip(run.segments, step_of[e], strict=True) if k == j]
         for seg in segs[:1]:

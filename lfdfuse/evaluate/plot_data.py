@@ -81,12 +81,13 @@ class PathData:
 
 
 def log_kind(path: str | Path) -> LogKind:
-    """``run`` (has ``/lfd/step``), ``segmented`` (has ``/lfd/segment``) or ``demo``."""
+    """``segmented`` (has ``/lfd/segment``; a segmented correction keeps its run's ``/lfd/step``),
+    ``run`` (has ``/lfd/step``) or ``demo``."""
     channels = file_info(path).channels
-    if "/lfd/step" in channels:
-        return "run"
     if "/lfd/segment" in channels:
         return "segmented"
+    if "/lfd/step" in channels:
+        return "run"
     return "demo"
 
 

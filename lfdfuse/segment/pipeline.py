@@ -3,7 +3,8 @@
 Reads the run, computes the behaviour primitives over the whole log at once, splits it at goal
 achievements and BAC changes (:mod:`~lfdfuse.segment.goals`), pairs every scan with the
 demonstrated heading (:mod:`~lfdfuse.segment.demo`), and writes every input channel through
-with ``/lfd/behaviors``, ``/lfd/demo``, ``/lfd/bac`` and ``/lfd/segment`` interleaved in time.
+(of a correction's ``/lfd/*`` ones only who drove and the network's step, ``/lfd/authority``
+and ``/lfd/step``) with ``/lfd/behaviors``, ``/lfd/demo``, ``/lfd/bac`` and ``/lfd/segment`` interleaved in time.
 """
 
 from __future__ import annotations
@@ -44,9 +45,14 @@ from lfdfuse.segment.lag import (
     lag_fits,
     press_lag_fits,
 )
-from lfdfuse.segment.read import AUTHORITY_TOPIC, network_ticks
+from lfdfuse.segment.read import AUTHORITY_TOPIC, STEP_TOPIC, network_ticks
 from lfdfuse.sim.robot import RobotParams
 from lfdfuse.sources.importers import require_lfdfuse_log
+
+#: ``/lfd/*`` channels of a correction (``teleop --table``, it says who drove) that segment
+#: copies through: who drove each tick and the network step it was in (estimate learns a
+#: correction in the sub-step the network was in); any other log's ``/lfd/*`` are replaced
+_KEPT = frozenset({AUTHORITY_TOPIC, STEP_TOPIC})
 
 # the shares of a segment run's time (a 30-minute demo, profiled): reading the log, the
 # behaviour primitives, the lag search, and writing the segmented copy
@@ -183,10 +189,11 @@ def segment_file(
         t0 = int(run.t_ns[0]) if len(run.t_ns) else 0
         span = max(int(run.t_ns[-1]) - t0, 1) if len(run.t_ns) else 1
         # copy every input channel (but our own, which we replace) interleaved in time order
+        kept = _KEPT if net is not None else frozenset()
         copied = 0
         for raw in iter_raw(src):
-            if raw.topic.startswith("/lfd/") and raw.topic != AUTHORITY_TOPIC:
-                continue  # ours, replaced (who drove is the input's: it stays)
+            if raw.topic.startswith("/lfd/") and raw.topic not in kept:
+                continue  # ours, replaced (who drove and the network's step are the input's: they stay)
             while pending is not None and pending[1] < raw.log_time_ns:
                 log.write_raw(*pending)
                 pending = next(lfd_msgs, None)

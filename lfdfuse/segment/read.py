@@ -260,5 +260,31 @@ def network_ticks(path: str | Path, when_ns: np.ndarray) -> np.ndarray | None:
     return np.asarray(flags[hold(ts, when_ns)])
 
 
+#: the network's active step of each tick of a run (DESIGN §5), kept by segment for corrections
+STEP_TOPIC = lfd.NetworkStep.TOPIC
+
+
+def network_steps(path: str | Path, when_ns: np.ndarray) -> tuple[str | None, ...] | None:
+    """Per time of ``when_ns (N,)`` the network's active step (``/lfd/step`` held: nested names
+    joined by ``/``, None once the task is complete), or None when the log has no such channel."""
+    if STEP_TOPIC not in file_info(path).channels:
+        return None
+    t: list[int] = []
+    names: list[str | None] = []
+    at = 0
+    try:
+        for _topic, _s, at, data in iter_messages(path, topics=[STEP_TOPIC]):
+            t.append(at)
+            names.append(lfd.NetworkStep.decode(data).step)
+    except MessageError as exc:
+        raise LogError(f"{path}: a {STEP_TOPIC} message at t={at} ns: {exc}") from exc
+    if not t:
+        return None
+    ts = np.array(t, dtype=np.int64)
+    order = np.argsort(ts, kind="stable")
+    held = order[hold(ts[order], when_ns)]
+    return tuple(names[int(i)] for i in held)
+
+
 def segmentation_of(seg: SegmentedRun) -> Segmentation:
     return Segmentation(seg.segments, seg.segment_of, seg.bac)

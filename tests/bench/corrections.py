@@ -10,16 +10,25 @@ with a failing start, then the summary: fixed (the failing start and ≥ 2 of 3 
 and regressions (starts that completed before and fail after).
 
     python -m tests.bench.run --suite corrections
+
+Run alone it takes seed ranges, keeps every world's folder (``--keep DIR``: a world screened
+there before is not screened again, so learning corrections anew costs only the correction and
+the runs after), writes a JSON line per world as it finishes (``--json FILE``), and can screen
+only (``--screen-only``)::
+
+    python -m tests.bench.corrections --seeds 1648-1699,1704-1759 --keep /tmp/corr --json corr.jsonl
 """
 
 from __future__ import annotations
 
-import sys
+import argparse
+import json
 import tempfile
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from tests.support.taught_again import TaughtAgain, summary, teach_again
+from tests.support.taught_again import TaughtAgain, screen, summary, teach_again, teach_again_screened
 
 FIRST_SEED = 1640
 WANTED = 20
@@ -37,6 +46,52 @@ def run(quick: bool = False, *, first: int = FIRST_SEED, wanted: int | None = No
     return [w.row() for w in worlds if w.failing is not None] + [{"name": "summary", **summary(worlds)}]
 
 
-if __name__ == "__main__":
-    for row in run(quick="--quick" in sys.argv):
+def seeds_of(text: str) -> list[int]:
+    """``1648-1699,1704`` → the seeds, in order."""
+    out: list[int] = []
+    for part in text.split(","):
+        lo, _, hi = part.partition("-")
+        out += range(int(lo), int(hi or lo) + 1)
+    return out
+
+
+def run_seeds(
+    seeds: Iterable[int], *, keep: Path, out: Path | None, screen_only: bool = False
+) -> dict[str, Any]:
+    worlds: list[TaughtAgain] = []
+    for seed in seeds:
+        folder = keep / str(seed)
+        folder.mkdir(parents=True, exist_ok=True)
+        s = screen(seed, folder=folder)
+        if screen_only:
+            row: dict[str, Any] = {
+                "name": f"offroute-{seed}",
+                "teacher": "completed" if s.demo_completed else "failed",
+                "before": "".join("✓" if ok else "✗" for ok in s.before),
+                "wall_s": {k: round(v, 1) for k, v in s.times.items()},
+            }
+        else:
+            w = teach_again_screened(s, folder=folder)
+            worlds.append(w)
+            row = w.row()
+        if out is not None:
+            with out.open("a") as f:
+                f.write(json.dumps(row, ensure_ascii=False) + "\n")
         print(row, flush=True)
+    return {"name": "summary", **summary(worlds)}
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--seeds", help="seed ranges, e.g. 1648-1699,1704")
+    ap.add_argument("--keep", type=Path, help="keep every world's folder here (and reuse its screening)")
+    ap.add_argument("--json", type=Path, help="append a JSON line per world")
+    ap.add_argument("--screen-only", action="store_true")
+    a = ap.parse_args()
+    if a.seeds is None:
+        for r in run(quick=a.quick):
+            print(r, flush=True)
+    else:
+        keep = a.keep or Path(tempfile.mkdtemp(prefix="corrections-"))
+        print(run_seeds(seeds_of(a.seeds), keep=keep, out=a.json, screen_only=a.screen_only), flush=True)

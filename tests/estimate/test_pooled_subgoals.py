@@ -6,11 +6,16 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import numpy as np
+
 from lfdfuse.estimate.pooled_subgoals import Verdict, same_place
+from lfdfuse.estimate.sub_step_corrections import goals_once
 from lfdfuse.network.changes import step_changes
 from lfdfuse.network.landmark_goals import Landmark
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step
 from lfdfuse.segment.decisions import DecisionPoint
+from lfdfuse.segment.goals import GoalSegment
+from lfdfuse.segment.read import SegmentedRun
 
 SPUR = DecisionPoint(
     segment=1,
@@ -73,3 +78,48 @@ def test_step_changes_name_new_sub_goals_and_re_weighted_rows_only() -> None:
         "reach-green: now to-left-opening-2 (the 2nd opening on the left (the teacher met it after 12.0 m))"
         " → turn-left (turned 80° to the left) → reach-green"
     )
+
+
+def _run(*segs: tuple[int, str | None]) -> SegmentedRun:
+    """A run of goal segments of these lengths and goals (nothing else in it matters here)."""
+    n = sum(k for k, _ in segs)
+    bounds = np.cumsum([0, *(k for k, _ in segs)])
+    segments = tuple(
+        GoalSegment(i, int(a), int(b), g)
+        for i, (a, b, (_, g)) in enumerate(zip(bounds[:-1], bounds[1:], segs, strict=True))
+    )
+    seg_of = np.repeat(np.arange(len(segs)), [k for k, _ in segs])
+    z = np.zeros(n)
+    return SegmentedRun(
+        ("avoid",),
+        z.astype(np.int64),
+        np.zeros((n, 1, 2)),
+        np.ones((n, 1), bool),
+        np.zeros((n, 1), bool),
+        np.zeros((n, 2)),
+        np.ones(n, bool),
+        np.ones(n, np.int64),
+        seg_of,
+        segments,
+        {},
+    )
+
+
+def test_a_goal_met_again_while_lingering_starts_no_goal_segment_of_a_correction() -> None:
+    red, green, blue = "attract_red", "attract_green", "attract_blue"
+    run = _run((10, red), (30, green), (5, green), (4, green), (20, blue))
+    once = goals_once(run)
+    assert [(s.start, s.stop, s.goal) for s in once.segments] == [
+        (0, 10, red),
+        (10, 40, green),
+        (40, 69, blue),
+    ]
+    assert once.segment_of.tolist() == [0] * 10 + [1] * 30 + [2] * 29
+    ended = goals_once(_run((10, red), (30, green), (5, green)))  # never on to blue: a tour after green
+    assert [(s.start, s.stop, s.goal) for s in ended.segments] == [
+        (0, 10, red),
+        (10, 40, green),
+        (40, 45, None),
+    ]
+    plain = _run((10, red), (30, green), (20, None))
+    assert goals_once(plain) is plain

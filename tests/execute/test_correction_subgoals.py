@@ -24,8 +24,9 @@ import numpy as np
 from lfdfuse import learn
 from lfdfuse.estimate.paper import PFParams
 from lfdfuse.estimate.pipeline import EstimateOptions
-from lfdfuse.estimate.pooled_subgoals import FurtherDemo, pool_subgoals
+from lfdfuse.estimate.pooled_subgoals import pool_subgoals
 from lfdfuse.estimate.smc import SMCParams
+from lfdfuse.estimate.sub_step_corrections import FurtherDemo
 from lfdfuse.estimate.subgoals import track_of
 from lfdfuse.execute.starts import perturbed_starts
 from lfdfuse.network.table import named_leaf_steps

@@ -129,6 +129,28 @@ def test_without_input_the_whole_run_is_the_execute_run(tmp_path: Path) -> None:
     assert len(auth) == 61 and not any(a.person for a in auth)
 
 
+def test_segment_keeps_a_corrections_network_step_and_who_drove(tmp_path: Path) -> None:
+    """Segmented, a correction keeps ``/lfd/step`` and ``/lfd/authority`` message for message (the
+    network's sub-step at each tick is what estimate learns a correction in), read back per tick
+    by :func:`network_steps`, and the file still passes the independent MCAP check."""
+    from lfdfuse.segment.pipeline import segment_file
+    from lfdfuse.segment.read import network_steps, read_segmented
+
+    _, corr = _correct(
+        tmp_path, {1.0: key("i"), 2.0: [Input("handback", "", "script")]}, seed=5, duration_s=4.0
+    )
+    seg = tmp_path / "c.seg.mcap"
+    segment_file(corr, out=seg, behaviors=",".join(_table().behaviors), measure_lag=False)
+    for topic in ("/lfd/step", "/lfd/authority"):
+        assert _by_tick(seg, topic) == _by_tick(corr, topic), topic
+    run = read_segmented(seg)
+    steps = network_steps(seg, run.t_ns)
+    want = [lfd.NetworkStep.decode(d).step for _, d in sorted(_by_tick(corr, "/lfd/step").items())]
+    assert steps is not None and list(steps) == want and len(want) == len(run.t_ns)
+    assert network_steps(tmp_path / "c.seg.mcap", run.t_ns[:3]) == tuple(want[:3])
+    mcap_check(seg)
+
+
 # -- who drives --------------------------------------------------------------------------------
 
 

@@ -2,17 +2,24 @@
 
 In the generated off-route world of a seed (:mod:`tests.support.generated_worlds`) the scripted
 teacher demonstrates the three-goal task once; the demo is learned with sub-goals, checked in its
-world (``estimate --subgoals``), and the table runs from :data:`STARTS` perturbed starts. From the
-first start that fails, a scripted person corrects it once (:mod:`tests.support.corrections`:
-the teacher's path where the robot left it); the demo and the correction are estimated together
-with sub-goals (``estimate demo.seg.mcap corr.seg.mcap --subgoals``) and the new table runs from
-the same starts. :func:`teach_again` is one world; the ``corrections`` bench many.
+world (``estimate --subgoals``), and the table runs from :data:`STARTS` perturbed starts
+(:func:`screen`). From the first start that fails, a scripted person corrects it once
+(:mod:`tests.support.corrections`: the teacher's path where the robot left it); the demo and the
+correction are estimated together with sub-goals (``estimate demo.seg.mcap corr.seg.mcap
+--subgoals``) and the new table runs from the same starts (:func:`teach_again_screened`).
+
+Screening does not depend on how corrections are learned, so its result is kept in the world's
+folder (``screen.pickle``: the demo's table and the runs before) and a second pass over the same
+folder learns the correction again without screening again. :func:`teach_again` is one world;
+the ``corrections`` bench many. Every phase's wall time is kept (``times``).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+import pickle
+import time
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +39,7 @@ from tests.support.offroute import OffRouteCase, run_starts
 
 #: the starts every table runs from: the failing one and (at least) three others
 STARTS = 4
+SCREEN_FILE = "screen.pickle"
 
 
 @dataclass(frozen=True)
@@ -47,6 +55,7 @@ class TaughtAgain:
     verdicts: tuple[str, ...] = ()
     table_before: FusionTable | None = field(default=None, compare=False)
     table_after: FusionTable | None = field(default=None, compare=False)
+    times: dict[str, float] = field(default_factory=dict, compare=False)  # wall s per phase
 
     @property
     def fixed(self) -> bool:
@@ -72,58 +81,131 @@ class TaughtAgain:
             "fixed": self.fixed,
             "regressions": self.regressions,
             "decisions": " | ".join(self.verdicts),
+            "wall_s": {k: round(v, 1) for k, v in self.times.items()},
         }
 
 
-def teach_again(seed: int, *, folder: Path, estimate: EstimateOptions = EstimateOptions()) -> TaughtAgain:
-    """Demonstrate, learn with sub-goals, run, correct the first failing start once, learn again, run."""
+@dataclass(frozen=True)
+class Screened:
+    """A world screened: its demo, the table learned from it and the runs before."""
+
+    seed: int
+    demo_segmented: Path
+    demo_completed: bool
+    max_time_s: float = 0.0
+    poses: tuple[tuple[float, float, float], ...] = ()
+    table: FusionTable | None = None
+    before: tuple[bool, ...] = ()
+    times: dict[str, float] = field(default_factory=dict)
+
+
+class _Clock:
+    def __init__(self) -> None:
+        self.times: dict[str, float] = {}
+        self._t = time.perf_counter()
+
+    def lap(self, name: str) -> None:
+        now = time.perf_counter()
+        self.times[name] = self.times.get(name, 0.0) + now - self._t
+        self._t = now
+
+
+def _case(seed: int, max_time_s: float) -> OffRouteCase:
+    return OffRouteCase(
+        generate_offroute(seed), THREE_GOALS, max_time_s, tuple(str(leg.target) for leg in THREE_GOALS)
+    )
+
+
+def screen(seed: int, *, folder: Path, estimate: EstimateOptions = EstimateOptions()) -> Screened:
+    """Demonstrate, learn with sub-goals and run from every start (kept in ``folder``: a second
+    call reads it back)."""
+    kept = folder / SCREEN_FILE
+    if kept.exists():
+        with kept.open("rb") as f:
+            done: Screened = pickle.load(f)
+        return done
+    clock = _Clock()
     world = generate_offroute(seed)
     demo = learn.demonstrate(
         THREE_GOALS, world=world, folder=folder, name=f"{world.name}-demo", duration_s=900.0, seed=1
     )
+    clock.lap("demonstrate+segment")
     run = read_segmented(demo.segmented)
-    if [s.target for s in run.segments if s.target is not None] != [leg.target for leg in THREE_GOALS]:
-        return TaughtAgain(seed, False)
-    max_time_s = float(math.ceil(TIME_FACTOR * demo.duration_s / 10.0) * 10.0)
-    case = OffRouteCase(world, THREE_GOALS, max_time_s, tuple(str(leg.target) for leg in THREE_GOALS))
-    options = learn.LearnOptions(estimate, subgoals=True)
-    table = learn.learn([demo.segmented], options=options).table
-    poses = [
-        p.as_tuple()
-        for p in perturbed_starts(world, Pose(*world.start), n=STARTS, rng=np.random.default_rng(seed))
-    ]
-    rows = run_starts(table, case, starts=poses, folder=folder, label="before")
-    before = tuple(bool(r["completed"]) for r in rows)
-    if all(before):
-        return TaughtAgain(seed, True, before, table_before=table)
-    failing = before.index(False)
-    teacher_xy = np.asarray(read_run(demo.segmented).pose)[:, :2]
+    out = Screened(seed, demo.segmented, False)
+    if [s.target for s in run.segments if s.target is not None] == [leg.target for leg in THREE_GOALS]:
+        max_time_s = float(math.ceil(TIME_FACTOR * demo.duration_s / 10.0) * 10.0)
+        options = learn.LearnOptions(estimate, subgoals=True)
+        table = learn.learn([demo.segmented], options=options).table
+        clock.lap("estimate --subgoals")
+        poses = tuple(
+            p.as_tuple()
+            for p in perturbed_starts(world, Pose(*world.start), n=STARTS, rng=np.random.default_rng(seed))
+        )
+        rows = run_starts(table, _case(seed, max_time_s), starts=list(poses), folder=folder, label="before")
+        clock.lap("execute before")
+        before = tuple(bool(r["completed"]) for r in rows)
+        out = Screened(seed, demo.segmented, True, max_time_s, poses, table, before)
+    out = replace(out, times=clock.times)
+    with kept.open("wb") as f:
+        pickle.dump(out, f)
+    return out
+
+
+def teach_again_screened(
+    s: Screened, *, folder: Path, estimate: EstimateOptions = EstimateOptions()
+) -> TaughtAgain:
+    """From a screened world: correct the first failing start once, learn again, run again."""
+    if not s.demo_completed or s.table is None:
+        return TaughtAgain(s.seed, False, times=s.times)
+    if all(s.before):
+        return TaughtAgain(s.seed, True, s.before, table_before=s.table, times=s.times)
+    clock = _Clock()
+    table, poses = s.table, s.poses
+    failing = s.before.index(False)
+    teacher_xy = np.asarray(read_run(s.demo_segmented).pose)[:, :2]
     corr = record_correction(
         table,
-        world=world,
+        world=generate_offroute(s.seed),
         start=Pose(*poses[failing]),
         seed=failing,  # run_starts drives start k with seed k
         failed_log=folder / f"before-{failing}.mcap",
         teacher_xy=teacher_xy,
-        max_time_s=max_time_s,
+        max_time_s=s.max_time_s,
         out=folder / "correction.mcap",
     )
+    clock.lap("correct+segment")
     if corr is None:
-        return TaughtAgain(seed, True, before, failing, table_before=table)
-    res = learn.learn([demo.segmented, corr], options=options)
+        return TaughtAgain(
+            s.seed, True, s.before, failing, table_before=table, times={**s.times, **clock.times}
+        )
+    res = learn.learn([s.demo_segmented, corr], options=learn.LearnOptions(estimate, subgoals=True))
+    clock.lap("estimate demo+correction")
     after = tuple(
-        bool(r["completed"]) for r in run_starts(res.table, case, starts=poses, folder=folder, label="after")
+        bool(r["completed"])
+        for r in run_starts(
+            res.table, _case(s.seed, s.max_time_s), starts=list(poses), folder=folder, label="after"
+        )
     )
+    clock.lap("execute after")
     return TaughtAgain(
-        seed,
+        s.seed,
         True,
-        before,
+        s.before,
         failing,
         True,
         after,
         tuple(v.describe() for v in res.verdicts),
         table,
         res.table,
+        {**s.times, **clock.times},
+    )
+
+
+def teach_again(seed: int, *, folder: Path, estimate: EstimateOptions = EstimateOptions()) -> TaughtAgain:
+    """Demonstrate, learn with sub-goals, run, correct the first failing start once, learn again, run."""
+    folder.mkdir(parents=True, exist_ok=True)
+    return teach_again_screened(
+        screen(seed, folder=folder, estimate=estimate), folder=folder, estimate=estimate
     )
 
 
