@@ -50,41 +50,45 @@ def sum_cos_reference(data: RowSteps, w: np.ndarray) -> np.ndarray:
     return s
 
 
-def _sum_cos_loop(along: np.ndarray, across: np.ndarray, wt: np.ndarray, block: int) -> np.ndarray:
+def _sum_cos_loop(
+    along: np.ndarray, across: np.ndarray, wt: np.ndarray, block: int, width: tuple[int, ...]
+) -> np.ndarray:
     """:func:`~lfdfuse.estimate.model.sum_cos` as one loop: ``along, across (T, n)``, ``wt (n, P)`` → ``S (P,)``, summed
-    over blocks of ``block`` steps as the reference sums them (the particles innermost)."""
-    steps, n = along.shape
+    over blocks of ``block`` steps as the reference sums them (the particles innermost).
+
+    ``width``: any tuple of ``n`` items (:func:`behaviour_width`). Its length is a constant of the
+    compiled code, one specialisation per ``n``: the loop over the behaviours unrolls, each
+    particle's two dot products stay in registers and the particles run in vector lanes (half
+    again as fast as a loop over ``n`` known only at run time). Each particle's sums are taken
+    in the same order either way: the same numbers."""
+    steps = along.shape[0]
+    n = len(width)
     p_count = wt.shape[1]
     s = np.zeros(p_count)
     part = np.zeros(p_count)
-    a = np.empty(p_count)
-    b = np.empty(p_count)
     for c in range(0, steps, block):
         for t in range(c, min(steps, c + block)):
-            x0 = along[t, 0]
-            y0 = across[t, 0]
+            first = t == c
             for p in range(p_count):
-                a[p] = x0 * wt[0, p]
-                b[p] = y0 * wt[0, p]
-            for k in range(1, n):
-                x = along[t, k]
-                y = across[t, k]
-                for p in range(p_count):
-                    a[p] += x * wt[k, p]
-                    b[p] += y * wt[k, p]
-            if t == c:
-                for p in range(p_count):
-                    part[p] = a[p] / max(math.sqrt(a[p] * a[p] + b[p] * b[p]), 1e-12)
-            else:
-                for p in range(p_count):
-                    part[p] += a[p] / max(math.sqrt(a[p] * a[p] + b[p] * b[p]), 1e-12)
+                a = along[t, 0] * wt[0, p]
+                b = across[t, 0] * wt[0, p]
+                for k in range(1, n):
+                    a += along[t, k] * wt[k, p]
+                    b += across[t, k] * wt[k, p]
+                v = a / max(math.sqrt(a * a + b * b), 1e-12)
+                part[p] = v if first else part[p] + v
         for p in range(p_count):
             s[p] += part[p]
     return s
 
 
+def behaviour_width(n: int) -> tuple[int, ...]:
+    """The ``width`` argument of :func:`_sum_cos_loop` for rows of ``n`` behaviours."""
+    return (0,) * n
+
+
 #: :func:`_sum_cos_loop`, compiled on first use
-SUM_COS = kernel(_sum_cos_loop)
+SUM_COS = kernel(_sum_cos_loop, specialise_on=4)
 
 
 #: ``math.exp(x) == 0.0`` for every ``x`` below this (the smallest subnormal is ``exp(-744.4)``)

@@ -378,7 +378,7 @@ def sum_cos(data: RowData, w: np.ndarray, *, of: int | None = None) -> np.ndarra
     wt = np.ascontiguousarray(w.T, dtype=np.float64)
     block = max(16, kernels.BLOCK_ELEMENTS // max(1, of or w.shape[0]))
     if w.shape[1] and SUM_COS.ready():
-        return np.asarray(SUM_COS(data.along, data.across, wt, block))
+        return np.asarray(SUM_COS(data.along, data.across, wt, block, kernels.behaviour_width(w.shape[1])))
     return sum_cos_reference(data, w)
 
 

@@ -74,7 +74,7 @@ def test_the_loop_itself_is_the_reference_in_plain_python() -> None:
     data, _ = _row(rng, 40, 3, True)
     w = rng.dirichlet(np.full(3, 0.5), 7)
     wt = np.ascontiguousarray(w.T)
-    got = kernels._sum_cos_loop(data.along, data.across, wt, 16)
+    got = kernels._sum_cos_loop(data.along, data.across, wt, 16, kernels.behaviour_width(3))
     np.testing.assert_allclose(got, sum_cos_reference(data, w), rtol=0.0, atol=1e-12)
 
 
