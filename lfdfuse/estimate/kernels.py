@@ -246,3 +246,210 @@ def logsumexp_last(a: np.ndarray, *, keepdims: bool = False) -> np.ndarray:
     flat = np.ascontiguousarray(a).reshape(-1, a.shape[-1])
     out = LOGSUMEXP_ROWS(flat).reshape(a.shape[:-1] + ((1,) if keepdims else ()))
     return np.asarray(out)
+
+
+# ---------------------------------------------------------------------- the sampler's moves
+#
+# One random-walk Metropolis step of :class:`~lfdfuse.estimate.smc.TemperedSMC` over every chain
+# at once: in numpy a dozen passes over ``(C, M, n)`` arrays (the sampler's time besides the
+# likelihood), here two loops around numpy's Cholesky factor. Every sum is taken in the order
+# numpy takes it on x86-64 (its reductions and the two-lane loop of its ``einsum``), so the
+# compiled step gives the bits of :func:`move_frame_reference` and :func:`move_propose_reference`
+# there; the tests hold the two to 1e-12 everywhere.
+
+
+def move_frame_reference(logw: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The frame of a move: for log-weights ``logw (C, M, n)`` over the behaviours ``mask (C, n)``,
+    each chain's heaviest behaviour ``ref (C,)`` (the additive-log-ratio denominator), the
+    particles in those coordinates ``y (C, M, n)`` (0 at ``ref`` and on padding) and their
+    covariance ``(C, n, n)`` (a ``1e-8`` ridge on the diagonal)."""
+    c, m, n = logw.shape
+    mean_w = np.where(mask, np.exp(logw).mean(axis=1), -1.0)
+    ref = np.argmax(mean_w, axis=1)
+    lref = np.take_along_axis(logw, ref[:, None, None], axis=2)
+    y = np.where(mask[:, None, :], logw - lref, 0.0)
+    d = y - y.mean(axis=1, keepdims=True)
+    cov = np.einsum("cmi,cmj->cij", d, d) / max(1, m - 1) + 1e-8 * np.eye(n)
+    return np.asarray(ref), np.asarray(y), np.asarray(cov)
+
+
+def move_propose_reference(
+    y: np.ndarray,
+    logw: np.ndarray,
+    mask: np.ndarray,
+    ref: np.ndarray,
+    chol: np.ndarray,
+    z: np.ndarray,
+    scale: np.ndarray,
+    alpha: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The proposal of a move: ``y + scale · chol z`` on the free coordinates (not ``ref``, not
+    padding) back to log-weights ``(C, M, n)``, with the log prior (Dirichlet ``alpha`` in these
+    coordinates, :func:`~lfdfuse.estimate.model.log_prior_alr`) of the particles ``(C, M)`` and of
+    the proposals ``(C, M)``."""
+    c = logw.shape[0]
+    mask3 = mask[:, None, :]
+    free = mask.copy()
+    free[np.arange(c), ref] = False
+    step = np.einsum("cij,cmj->cmi", chol, z) * scale[:, None, None]
+    y_new = np.where(free[:, None, :], y + step, np.where(mask3, y, -np.inf))
+    logw_new = y_new - logsumexp_last(y_new, keepdims=True)
+    prior = alpha * np.where(mask3, logw, 0.0).sum(axis=-1)
+    prior_new = alpha * np.where(mask3, logw_new, 0.0).sum(axis=-1)
+    return np.asarray(logw_new), np.asarray(prior), np.asarray(prior_new)
+
+
+def _short_sum(x: np.ndarray, n: int) -> float:
+    """numpy's pairwise sum of ``x[:n]`` for ``n ≤ 128`` (one leaf: eight running sums)."""
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            res += x[i]
+        return res
+    r0 = x[0]
+    r1 = x[1]
+    r2 = x[2]
+    r3 = x[3]
+    r4 = x[4]
+    r5 = x[5]
+    r6 = x[6]
+    r7 = x[7]
+    i = 8
+    stop = n - n % 8
+    while i < stop:
+        r0 += x[i]
+        r1 += x[i + 1]
+        r2 += x[i + 2]
+        r3 += x[i + 3]
+        r4 += x[i + 4]
+        r5 += x[i + 5]
+        r6 += x[i + 6]
+        r7 += x[i + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += x[i]
+        i += 1
+    return res
+
+
+def _move_frame_loop(
+    logw: np.ndarray, mask: np.ndarray, active: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`move_frame_reference` for the ``active (C,)`` chains (the others: ``ref`` 0, ``y``
+    0 and the identity covariance)."""
+    c_count, m, n = logw.shape
+    ref = np.zeros(c_count, dtype=np.int64)
+    y = np.zeros((c_count, m, n))
+    cov = np.zeros((c_count, n, n))
+    mean = np.empty(n)
+    for c in range(c_count):
+        if not active[c]:
+            for i in range(n):
+                cov[c, i, i] = 1.0
+            continue
+        for i in range(n):
+            mean[i] = 0.0
+        for p in range(m):
+            for i in range(n):
+                mean[i] += math.exp(logw[c, p, i])
+        best = 0
+        top = -np.inf
+        for i in range(n):
+            v = mean[i] / m if mask[c, i] else -1.0
+            if v > top or (i == 0):
+                top = v
+                best = i
+        ref[c] = best
+        for i in range(n):
+            mean[i] = 0.0
+        for p in range(m):
+            lref = logw[c, p, best]
+            for i in range(n):
+                v = logw[c, p, i] - lref if mask[c, i] else 0.0
+                y[c, p, i] = v
+                mean[i] += v
+        for i in range(n):
+            mean[i] = mean[i] / m
+        for p in range(m):
+            for i in range(n):
+                di = y[c, p, i] - mean[i]
+                for j in range(n):
+                    cov[c, i, j] += di * (y[c, p, j] - mean[j])
+        div = max(1, m - 1)
+        for i in range(n):
+            for j in range(n):
+                cov[c, i, j] = cov[c, i, j] / div + (1e-8 if i == j else 0.0)
+    return ref, y, cov
+
+
+#: :func:`_move_frame_loop`, compiled on first use
+MOVE_FRAME = kernel(_move_frame_loop)
+
+
+def _move_propose_loop(
+    y: np.ndarray,
+    logw: np.ndarray,
+    mask: np.ndarray,
+    ref: np.ndarray,
+    chol: np.ndarray,
+    z: np.ndarray,
+    scale: np.ndarray,
+    alpha: float,
+    active: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`move_propose_reference` for the ``active (C,)`` chains (the others keep their
+    log-weights, both priors theirs). ``chol z`` is summed as numpy's ``einsum`` sums it on
+    x86-64: two running sums over alternate behaviours (its loop of eight taken last pair
+    first), added at the end."""
+    c_count, m, n = logw.shape
+    logw_new = logw.copy()
+    prior = np.zeros((c_count, m))
+    prior_new = np.zeros((c_count, m))
+    row = np.empty(n)
+    for c in range(c_count):
+        r = ref[c]
+        for p in range(m):
+            for i in range(n):
+                row[i] = logw[c, p, i] if mask[c, i] else 0.0
+            prior[c, p] = alpha * _short_sum(row, n)
+        if not active[c]:
+            for p in range(m):
+                prior_new[c, p] = prior[c, p]
+            continue
+        y_new = np.empty((m, n))
+        for p in range(m):
+            for i in range(n):
+                if mask[c, i] and i != r:
+                    lane0 = 0.0
+                    lane1 = 0.0
+                    j = 0
+                    while n - j >= 8:  # numpy's unrolled loop: four pairs, the last first
+                        for q in range(6, -1, -2):
+                            lane0 += chol[c, i, j + q] * z[c, p, j + q]
+                            lane1 += chol[c, i, j + q + 1] * z[c, p, j + q + 1]
+                        j += 8
+                    while j + 1 < n:
+                        lane0 += chol[c, i, j] * z[c, p, j]
+                        lane1 += chol[c, i, j + 1] * z[c, p, j + 1]
+                        j += 2
+                    if j < n:
+                        lane0 += chol[c, i, j] * z[c, p, j]
+                        lane1 += 0.0
+                    y_new[p, i] = y[c, p, i] + (0.0 + (lane0 + lane1)) * scale[c]
+                elif mask[c, i]:
+                    y_new[p, i] = y[c, p, i]
+                else:
+                    y_new[p, i] = -np.inf
+        lse = _logsumexp_rows_loop(y_new)
+        for p in range(m):
+            for i in range(n):
+                v = y_new[p, i] - lse[p]
+                logw_new[c, p, i] = v
+                row[i] = v if mask[c, i] else 0.0
+            prior_new[c, p] = alpha * _short_sum(row, n)
+    return logw_new, prior, prior_new
+
+
+#: :func:`_move_propose_loop`, compiled on first use
+MOVE_PROPOSE = kernel(_move_propose_loop, calls=[_short_sum, _logsumexp_rows_loop])
