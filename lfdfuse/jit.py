@@ -132,6 +132,13 @@ class Kernel:
         with _signals_held():
             return self._compile()
 
+    def warm_for(self, length: int | None = None) -> bool:
+        """Whether the loop (with ``specialise_on``: for that length) is compiled or loaded
+        already: a call of it then costs no compilation, and may run off the main thread."""
+        if self._compiled is None:
+            return False
+        return self._warm if self.specialise_on is None else length in self._warm_lengths
+
     def _compile(self) -> bool:
         numba = _import_numba()
         if numba is None:

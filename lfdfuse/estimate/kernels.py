@@ -8,6 +8,8 @@ it stands for stays the reference (:func:`sum_cos_reference`,
 from __future__ import annotations
 
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
 from typing import Protocol
 
 import numpy as np
@@ -89,6 +91,60 @@ def behaviour_width(n: int) -> tuple[int, ...]:
 
 #: :func:`_sum_cos_loop`, compiled on first use
 SUM_COS = kernel(_sum_cos_loop, specialise_on=4)
+
+#: particle-steps below which a row's likelihood runs in one thread (a thread's hand-over costs
+#: about what a few hundred thousand particle-steps do)
+SPLIT_WORK = 1 << 20
+
+_pool: list[ThreadPoolExecutor] = []
+
+
+def _cores() -> int:
+    """The cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def _forget_pool() -> None:
+    _pool.clear()  # a forked child has none of its parent's threads
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_pool)
+
+
+def continuous_loglik(
+    along: np.ndarray,
+    across: np.ndarray,
+    wt: np.ndarray,
+    block: int,
+    steps: float,
+    kappas: np.ndarray,
+    log_norm: np.ndarray,
+) -> np.ndarray:
+    """``log p(data | w)`` of a continuous row for weights ``wt (n, P)`` (:data:`SUM_COS` then
+    :data:`LOG_MARGINAL`), the particles shared out over the machine's cores when the row is
+    long enough to pay for it. Each particle's numbers are computed on their own, in the same
+    order, whichever thread and share it falls in: the result does not depend on the split."""
+    n, p_count = wt.shape
+    width = behaviour_width(n)
+
+    def one(w: np.ndarray) -> np.ndarray:
+        return np.asarray(LOG_MARGINAL(SUM_COS(along, across, w, block, width), steps, kappas, log_norm))
+
+    cores = _cores()
+    parts = min(cores, p_count // 64, (along.shape[0] * p_count) // SPLIT_WORK)
+    if parts < 2 or not (SUM_COS.warm_for(n) and LOG_MARGINAL.warm_for()):
+        return one(wt)
+    if not _pool:
+        _pool.append(ThreadPoolExecutor(max_workers=cores - 1, thread_name_prefix="lfdfuse-pf"))
+    cuts = [p_count * i // parts for i in range(parts + 1)]
+    chunks = [np.ascontiguousarray(wt[:, lo:hi]) for lo, hi in zip(cuts[:-1], cuts[1:], strict=True)]
+    futures = [_pool[0].submit(one, w) for w in chunks[1:]]
+    first = one(chunks[0])  # this thread takes a share too
+    return np.concatenate([first, *(f.result() for f in futures)])
 
 
 #: ``math.exp(x) == 0.0`` for every ``x`` below this (the smallest subnormal is ``exp(-744.4)``)

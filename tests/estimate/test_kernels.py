@@ -332,3 +332,27 @@ def test_the_sampler_with_compiled_moves_gives_the_reference_draws(monkeypatch: 
     if platform.machine() in ("x86_64", "AMD64"):
         assert fast.logw.tobytes() == ref.logw.tobytes()
         assert fast.log_evidence.tobytes() == ref.log_evidence.tobytes()
+
+
+@needs_numba
+@settings(max_examples=25, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1), st.integers(1, 300), st.integers(1, 8), st.integers(1, 700), st.integers(2, 5)
+)
+def test_a_rows_likelihood_shared_over_threads_is_the_same_bits(
+    seed: int, steps: int, n: int, particles: int, cores: int
+) -> None:
+    """The particles of a long row are shared out over the cores: every particle's likelihood is
+    the bits one thread gives it (and the numpy reference's to 1e-12), whatever the split."""
+    rng = np.random.default_rng(seed)
+    data, _ = _row(rng, steps, n, True)
+    w = rng.dirichlet(np.full(n, 0.5), particles)
+    m = model.FusionModel()
+    one = model.row_loglik(data, w, m)  # compiles this width: the split needs it warm
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(kernels, "SPLIT_WORK", 1)
+        patch.setattr(kernels, "_cores", lambda: cores)
+        shared = model.row_loglik(data, w, m)
+    assert shared.tobytes() == one.tobytes()
+    want = model.log_marginal(sum_cos_reference(data, w), data.steps, m)
+    np.testing.assert_allclose(shared, want, rtol=1e-13, atol=1e-12)
