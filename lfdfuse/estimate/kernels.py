@@ -509,3 +509,150 @@ def _move_propose_loop(
 
 #: :func:`_move_propose_loop`, compiled on first use
 MOVE_PROPOSE = kernel(_move_propose_loop, calls=[_short_sum, _logsumexp_rows_loop])
+
+
+# ---------------------------------------------------------------------- adaptive tempering
+
+
+def next_delta_reference(ll: np.ndarray, room: np.ndarray, target: float) -> np.ndarray:
+    """Per chain the temperature increment ``(C,)`` that brings the effective sample size of the
+    incremental weights ``L^δ`` to ``target``, ``δ`` at most ``room (C,)``: all of it when that
+    keeps the ESS at the target, else 30 bisections (and never below ``min(room, 1e-6)``: a
+    chain whose every step collapses still advances). ``ll (C, M)``: the particles' log-likelihoods."""
+    from lfdfuse.estimate.resampling import ess
+
+    ok = ess(room[:, None] * ll) >= target
+    lo = np.zeros_like(room)
+    top = room.copy()
+    for _ in range(30):
+        mid = 0.5 * (lo + top)
+        good = ess(mid[:, None] * ll) >= target
+        lo = np.where(good, mid, lo)
+        top = np.where(good, top, mid)
+    return np.asarray(np.where(ok, room, np.maximum(lo, np.minimum(room, 1e-6))))
+
+
+def _next_delta_loop(ll: np.ndarray, room: np.ndarray, target: float) -> np.ndarray:
+    """:func:`next_delta_reference` as one loop per chain, each effective sample size computed
+    operation for operation as :func:`~lfdfuse.estimate.resampling.ess` computes it on x86-64:
+    numpy's pairwise sum of the weights (halves cut at a multiple of 8 down to leaves of at most
+    128, each summed in eight running sums) and its ``einsum``'s sum of squares (two lanes, eight
+    at a time last pair first)."""
+    c_count, m = ll.shape
+    out = np.empty(c_count)
+    w = np.empty(max(m, 1))
+    stack_lo = np.empty(64, dtype=np.int64)
+    stack_n = np.empty(64, dtype=np.int64)
+    stack_st = np.empty(64, dtype=np.int64)
+    vals = np.empty(64)
+    for c in range(c_count):
+        hi = room[c]
+        lo = 0.0
+        top_x = hi
+        out[c] = hi
+        for it in range(31):
+            x_scale = hi if it == 0 else 0.5 * (lo + top_x)
+            # the weights exp(x - max), normalised
+            top = -np.inf
+            nan = False
+            for p in range(m):
+                x = x_scale * ll[c, p]
+                w[p] = x
+                if x != x:
+                    nan = True
+                elif x > top:
+                    top = x
+            if nan:
+                top = np.nan
+            shift = top if (top - top) == 0.0 else 0.0  # np.where(isfinite(top), top, 0)
+            for p in range(m):
+                w[p] = math.exp(w[p] - shift)
+            vp = 0
+            stack_lo[0] = 0
+            stack_n[0] = m
+            stack_st[0] = 0
+            sp = 1
+            while sp > 0:
+                base = stack_lo[sp - 1]
+                cnt = stack_n[sp - 1]
+                if cnt <= 128:
+                    sp -= 1
+                    if cnt < 8:
+                        res = 0.0
+                        for k in range(cnt):
+                            res += w[base + k]
+                    else:
+                        a0 = w[base]
+                        a1 = w[base + 1]
+                        a2 = w[base + 2]
+                        a3 = w[base + 3]
+                        a4 = w[base + 4]
+                        a5 = w[base + 5]
+                        a6 = w[base + 6]
+                        a7 = w[base + 7]
+                        k = 8
+                        stop = cnt - cnt % 8
+                        while k < stop:
+                            a0 += w[base + k]
+                            a1 += w[base + k + 1]
+                            a2 += w[base + k + 2]
+                            a3 += w[base + k + 3]
+                            a4 += w[base + k + 4]
+                            a5 += w[base + k + 5]
+                            a6 += w[base + k + 6]
+                            a7 += w[base + k + 7]
+                            k += 8
+                        res = ((a0 + a1) + (a2 + a3)) + ((a4 + a5) + (a6 + a7))
+                        while k < cnt:
+                            res += w[base + k]
+                            k += 1
+                    vals[vp] = res
+                    vp += 1
+                elif stack_st[sp - 1] == 0:
+                    stack_st[sp - 1] = 1
+                    half = cnt // 2
+                    half -= half % 8
+                    stack_lo[sp] = base + half
+                    stack_n[sp] = cnt - half
+                    stack_st[sp] = 0
+                    stack_lo[sp + 1] = base
+                    stack_n[sp + 1] = half
+                    stack_st[sp + 1] = 0
+                    sp += 2
+                else:
+                    sp -= 1
+                    vals[vp - 2] = vals[vp - 2] + vals[vp - 1]
+                    vp -= 1
+            total = vals[0]
+            for p in range(m):
+                w[p] = w[p] / total
+            lane0 = 0.0
+            lane1 = 0.0
+            j = 0
+            while m - j >= 8:
+                for q in range(6, -1, -2):
+                    lane0 += w[j + q] * w[j + q]
+                    lane1 += w[j + q + 1] * w[j + q + 1]
+                j += 8
+            while j + 1 < m:
+                lane0 += w[j] * w[j]
+                lane1 += w[j + 1] * w[j + 1]
+                j += 2
+            if j < m:
+                lane0 += w[j] * w[j]
+                lane1 += 0.0
+            good = 1.0 / (0.0 + (lane0 + lane1)) >= target
+            if it == 0:
+                if good:
+                    break
+            elif good:
+                lo = x_scale
+            else:
+                top_x = x_scale
+        else:
+            out[c] = max(lo, min(hi, 1e-6))
+    return out
+
+
+#: :func:`_next_delta_loop`, compiled on first use
+NEXT_DELTA = kernel(_next_delta_loop)

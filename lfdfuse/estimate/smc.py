@@ -33,13 +33,15 @@ from lfdfuse.estimate.kernels import (
     LOG_MARGINAL,
     MOVE_FRAME,
     MOVE_PROPOSE,
+    NEXT_DELTA,
     SUM_COS,
     logsumexp_last,
     move_frame_reference,
     move_propose_reference,
+    next_delta_reference,
 )
 from lfdfuse.estimate.model import FusionModel, Row, RowData, row_loglik, sample_prior
-from lfdfuse.estimate.resampling import ess, gather, resample
+from lfdfuse.estimate.resampling import gather, resample
 
 
 @dataclass(frozen=True)
@@ -238,17 +240,10 @@ class TemperedSMC:
     def _next_delta(self, active: np.ndarray) -> np.ndarray:
         """Per chain the temperature increment that brings the ESS to the target (bisection)."""
         target = self.params.ess_target * self.ll.shape[1]
-        hi = np.where(active, 1.0 - self.beta, 0.0)
-        ok = ess(hi[:, None] * self.ll) >= target
-        lo = np.zeros_like(hi)
-        top = hi.copy()
-        for _ in range(30):
-            mid = 0.5 * (lo + top)
-            good = ess(mid[:, None] * self.ll) >= target
-            lo = np.where(good, mid, lo)
-            top = np.where(good, top, mid)
-        # never stall: a chain whose every step would collapse still advances a little
-        return np.where(ok, hi, np.maximum(lo, np.minimum(hi, 1e-6)))
+        room = np.where(active, 1.0 - self.beta, 0.0)
+        if NEXT_DELTA.ready():
+            return np.asarray(NEXT_DELTA(np.ascontiguousarray(self.ll), room, float(target)))
+        return next_delta_reference(self.ll, room, target)
 
     def _move(self, active: np.ndarray) -> None:
         """One random-walk Metropolis step in additive-log-ratio coordinates for active chains."""

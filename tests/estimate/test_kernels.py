@@ -356,3 +356,29 @@ def test_a_rows_likelihood_shared_over_threads_is_the_same_bits(
     assert shared.tobytes() == one.tobytes()
     want = model.log_marginal(sum_cos_reference(data, w), data.steps, m)
     np.testing.assert_allclose(shared, want, rtol=1e-13, atol=1e-12)
+
+
+@needs_numba
+@settings(max_examples=80, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(1, 6),
+    st.sampled_from([1, 2, 3, 5, 17, 64, 129, 384, 1000, 1536]),
+    st.floats(0.0, 4.0),
+    st.sampled_from([0.3, 0.5, 0.9]),
+)
+def test_compiled_tempering_step_agrees_with_the_reference(
+    seed: int, chains: int, m: int, spread: float, share: float
+) -> None:
+    """The adaptive temperature step (the ESS bisection) against numpy's: to 1e-12, and on x86-64
+    (numpy's sums' order known) to the bit — a step decides every later draw."""
+    assert kernels.NEXT_DELTA.ready()
+    rng = np.random.default_rng(seed)
+    ll = rng.normal(0.0, 10.0**spread, (chains, m)) - rng.uniform(0.0, 1e4, (chains, 1))
+    room = rng.uniform(0.0, 1.0, chains) * (rng.uniform(size=chains) < 0.8)  # some chains done
+    got = kernels.NEXT_DELTA(ll, room, share * m)
+    want = kernels.next_delta_reference(ll, room, share * m)
+    np.testing.assert_allclose(got, want, rtol=0.0, atol=1e-12)
+    assert np.all((got >= 0.0) & (got <= room))
+    if platform.machine() in ("x86_64", "AMD64"):
+        assert got.tobytes() == want.tobytes()
