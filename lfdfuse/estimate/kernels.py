@@ -94,7 +94,7 @@ SUM_COS = kernel(_sum_cos_loop, specialise_on=4)
 
 #: particle-steps below which a row's likelihood runs in one thread (a thread's hand-over costs
 #: about what a few hundred thousand particle-steps do)
-SPLIT_WORK = 1 << 20
+SPLIT_WORK = 1 << 18
 
 _pool: list[ThreadPoolExecutor] = []
 
