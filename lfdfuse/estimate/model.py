@@ -432,16 +432,9 @@ def row_loglik(data: Row, w: np.ndarray, model: FusionModel, *, of: int | None =
     if isinstance(data, MixedRowData):
         both = row_loglik(data.continuous, w, model) + discrete_log_marginal(data.discrete, w, model)
         return np.asarray(both)
-    if w.shape[1] and SUM_COS.ready() and LOG_MARGINAL.ready():
-        wt = np.ascontiguousarray(w.T, dtype=np.float64)
-        block = max(16, kernels.BLOCK_ELEMENTS // max(1, of or w.shape[0]))
-        return kernels.continuous_loglik(
-            data.along, data.across, wt, block, float(data.steps), model.kappas, model._log_norm
-        )
-    stat = sum_cos(data, w, of=of)
-    if LOG_MARGINAL.ready():
-        return np.asarray(LOG_MARGINAL(stat, float(data.steps), model.kappas, model._log_norm))
-    return log_marginal(stat, data.steps, model)
+    if w.shape[1] and SUM_COS.ready() and LOG_MARGINAL.ready():  # compiled, over the cores
+        return kernels.continuous_loglik(data, w, of or w.shape[0], model.kappas, model._log_norm)
+    return log_marginal(sum_cos(data, w, of=of), data.steps, model)
 
 
 def log_marginal(s: np.ndarray, steps: np.ndarray | int, model: FusionModel) -> np.ndarray:

@@ -29,19 +29,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lfdfuse.estimate.kernels import (
-    LOG_MARGINAL,
+from lfdfuse.estimate.kernels import LOG_MARGINAL, SUM_COS, logsumexp_last
+from lfdfuse.estimate.model import FusionModel, Row, RowData, row_loglik, sample_prior
+from lfdfuse.estimate.resampling import gather, resample
+from lfdfuse.estimate.smc_kernels import (
     MOVE_FRAME,
     MOVE_PROPOSE,
     NEXT_DELTA,
-    SUM_COS,
-    logsumexp_last,
     move_frame_reference,
     move_propose_reference,
     next_delta_reference,
 )
-from lfdfuse.estimate.model import FusionModel, Row, RowData, row_loglik, sample_prior
-from lfdfuse.estimate.resampling import gather, resample
 
 
 @dataclass(frozen=True)

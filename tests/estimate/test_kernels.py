@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse.estimate import kernels, model
+from lfdfuse.estimate import kernels, model, smc_kernels
 from lfdfuse.estimate.model import RowData, sum_cos, sum_cos_reference
 
 needs_numba = pytest.mark.skipif(not kernels.SUM_COS.ready(), reason="numba kernels unavailable here")
@@ -256,20 +256,20 @@ def test_compiled_move_agrees_with_the_reference(
     """A Metropolis move's frame (reference behaviour, log-ratio coordinates, covariance) and
     proposal (log-weights and log priors) against the numpy steps they replace: to 1e-12, and on
     x86-64 (the reductions' order known) to the bit."""
-    assert kernels.MOVE_FRAME.ready() and kernels.MOVE_PROPOSE.ready()
+    assert smc_kernels.MOVE_FRAME.ready() and smc_kernels.MOVE_PROPOSE.ready()
     rng = np.random.default_rng(seed)
     logw, mask = _particles(rng, chains, m, n, padded)
     active = np.ones(chains, dtype=bool)
-    ref, y, cov = kernels.MOVE_FRAME(logw, mask, active)
-    want_ref, want_y, want_cov = kernels.move_frame_reference(logw, mask)
+    ref, y, cov = smc_kernels.MOVE_FRAME(logw, mask, active)
+    want_ref, want_y, want_cov = smc_kernels.move_frame_reference(logw, mask)
     assert np.array_equal(ref, want_ref)
     np.testing.assert_allclose(y, want_y, rtol=0.0, atol=1e-12)
     np.testing.assert_allclose(cov, want_cov, rtol=1e-12, atol=1e-12)
     chol = np.linalg.cholesky(want_cov)
     z = rng.standard_normal(logw.shape)
     scale = rng.uniform(0.05, 3.0, chains)
-    got = kernels.MOVE_PROPOSE(want_y, logw, mask, want_ref, chol, z, scale, 0.5, active)
-    want = kernels.move_propose_reference(want_y, logw, mask, want_ref, chol, z, scale, 0.5)
+    got = smc_kernels.MOVE_PROPOSE(want_y, logw, mask, want_ref, chol, z, scale, 0.5, active)
+    want = smc_kernels.move_propose_reference(want_y, logw, mask, want_ref, chol, z, scale, 0.5)
     for g, w in zip(got, want, strict=True):
         assert g.shape == w.shape
         np.testing.assert_allclose(g, w, rtol=1e-12, atol=1e-12)
@@ -285,14 +285,16 @@ def test_the_compiled_move_leaves_inactive_chains_as_they_are() -> None:
     rng = np.random.default_rng(2)
     logw, mask = _particles(rng, 4, 32, 5, True)
     active = np.array([True, False, True, False])
-    ref, y, cov = kernels.MOVE_FRAME(logw, mask, active)
+    ref, y, cov = smc_kernels.MOVE_FRAME(logw, mask, active)
     chol = np.linalg.cholesky(cov)
     z = rng.standard_normal(logw.shape)
-    logw_new, prior, prior_new = kernels.MOVE_PROPOSE(y, logw, mask, ref, chol, z, np.ones(4), 0.5, active)
+    logw_new, prior, prior_new = smc_kernels.MOVE_PROPOSE(
+        y, logw, mask, ref, chol, z, np.ones(4), 0.5, active
+    )
     assert np.array_equal(logw_new[~active], logw[~active])
     assert np.array_equal(prior[~active], prior_new[~active])
     assert not np.array_equal(logw_new[active], logw[active])
-    want = kernels.move_propose_reference(y, logw, mask, ref, chol, z, np.ones(4), 0.5)
+    want = smc_kernels.move_propose_reference(y, logw, mask, ref, chol, z, np.ones(4), 0.5)
     np.testing.assert_allclose(logw_new[active], want[0][active], rtol=0.0, atol=1e-12)
 
 
@@ -372,12 +374,12 @@ def test_compiled_tempering_step_agrees_with_the_reference(
 ) -> None:
     """The adaptive temperature step (the ESS bisection) against numpy's: to 1e-12, and on x86-64
     (numpy's sums' order known) to the bit — a step decides every later draw."""
-    assert kernels.NEXT_DELTA.ready()
+    assert smc_kernels.NEXT_DELTA.ready()
     rng = np.random.default_rng(seed)
     ll = rng.normal(0.0, 10.0**spread, (chains, m)) - rng.uniform(0.0, 1e4, (chains, 1))
     room = rng.uniform(0.0, 1.0, chains) * (rng.uniform(size=chains) < 0.8)  # some chains done
-    got = kernels.NEXT_DELTA(ll, room, share * m)
-    want = kernels.next_delta_reference(ll, room, share * m)
+    got = smc_kernels.NEXT_DELTA(ll, room, share * m)
+    want = smc_kernels.next_delta_reference(ll, room, share * m)
     np.testing.assert_allclose(got, want, rtol=0.0, atol=1e-12)
     assert np.all((got >= 0.0) & (got <= room))
     if platform.machine() in ("x86_64", "AMD64"):
