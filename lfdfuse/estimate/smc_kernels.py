@@ -92,7 +92,7 @@ def _short_sum(x: np.ndarray, n: int) -> float:
     while i < n:
         res += x[i]
         i += 1
-    return res
+    return float(res)
 
 
 def _move_frame_loop(
