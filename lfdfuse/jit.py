@@ -111,13 +111,16 @@ class Kernel:
         *,
         signature: str | None = None,
         calls: Sequence[Callable[..., Any]] = (),
+        specialise_on: int | None = None,
     ) -> None:
         self.fn = fn
         self.signature = signature
         self.calls = tuple(calls)
+        self.specialise_on = specialise_on
         self._compiled: Callable[..., Any] | None = None
         self._failed = False
         self._warm = False  # called once: compiled for its argument types, or loaded from the cache
+        self._warm_lengths: set[int] = set()  # with ``specialise_on``: the lengths compiled or loaded
 
     def ready(self) -> bool:
         """True when the compiled loop can run: compiled kernels are wanted, numba imports and
@@ -128,6 +131,13 @@ class Kernel:
             return True
         with _signals_held():
             return self._compile()
+
+    def warm_for(self, length: int | None = None) -> bool:
+        """Whether the loop (with ``specialise_on``: for that length) is compiled or loaded
+        already: a call of it then costs no compilation, and may run off the main thread."""
+        if self._compiled is None:
+            return False
+        return self._warm if self.specialise_on is None else length in self._warm_lengths
 
     def _compile(self) -> bool:
         numba = _import_numba()
@@ -156,6 +166,14 @@ class Kernel:
         if self._compiled is None and not self.ready():
             raise RuntimeError("compiled kernel called without ready(): call its numpy reference instead")
         assert self._compiled is not None
+        if self.specialise_on is not None:  # one compiled loop per length of that tuple argument
+            length = len(args[self.specialise_on])
+            if length in self._warm_lengths:
+                return self._compiled(*args)
+            with _signals_held():
+                result = self._compiled(*args)
+            self._warm_lengths.add(length)
+            return result
         if self._warm:
             return self._compiled(*args)
         with _signals_held():  # without a signature, numba compiles (or loads) on the first call
@@ -190,9 +208,12 @@ def kernel(
     *,
     signature: str | None = None,
     calls: Sequence[Callable[..., Any]] = (),
+    specialise_on: int | None = None,
 ) -> Any:
     """Decorate a numba-compatible loop as a lazily compiled :class:`Kernel` (``calls``: the
-    plain helpers it calls, compiled with it)."""
+    plain helpers it calls, compiled with it; ``specialise_on``: the index of a tuple argument
+    whose length the loop is compiled for, once per length, each held from signals while it
+    compiles or loads)."""
     if fn is None:
-        return lambda f: Kernel(f, signature=signature, calls=calls)
-    return Kernel(fn, signature=signature, calls=calls)
+        return lambda f: Kernel(f, signature=signature, calls=calls, specialise_on=specialise_on)
+    return Kernel(fn, signature=signature, calls=calls, specialise_on=specialise_on)

@@ -378,7 +378,7 @@ def sum_cos(data: RowData, w: np.ndarray, *, of: int | None = None) -> np.ndarra
     wt = np.ascontiguousarray(w.T, dtype=np.float64)
     block = max(16, kernels.BLOCK_ELEMENTS // max(1, of or w.shape[0]))
     if w.shape[1] and SUM_COS.ready():
-        return np.asarray(SUM_COS(data.along, data.across, wt, block))
+        return np.asarray(SUM_COS(data.along, data.across, wt, block, kernels.behaviour_width(w.shape[1])))
     return sum_cos_reference(data, w)
 
 
@@ -432,10 +432,9 @@ def row_loglik(data: Row, w: np.ndarray, model: FusionModel, *, of: int | None =
     if isinstance(data, MixedRowData):
         both = row_loglik(data.continuous, w, model) + discrete_log_marginal(data.discrete, w, model)
         return np.asarray(both)
-    stat = sum_cos(data, w, of=of)
-    if LOG_MARGINAL.ready():
-        return np.asarray(LOG_MARGINAL(stat, float(data.steps), model.kappas, model._log_norm))
-    return log_marginal(stat, data.steps, model)
+    if w.shape[1] and SUM_COS.ready() and LOG_MARGINAL.ready():  # compiled, over the cores
+        return kernels.continuous_loglik(data, w, of or w.shape[0], model.kappas, model._log_norm)
+    return log_marginal(sum_cos(data, w, of=of), data.steps, model)
 
 
 def log_marginal(s: np.ndarray, steps: np.ndarray | int, model: FusionModel) -> np.ndarray:

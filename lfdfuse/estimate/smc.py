@@ -30,8 +30,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from lfdfuse.estimate.kernels import LOG_MARGINAL, SUM_COS, logsumexp_last
-from lfdfuse.estimate.model import FusionModel, Row, RowData, log_prior_alr, row_loglik, sample_prior
-from lfdfuse.estimate.resampling import ess, gather, resample
+from lfdfuse.estimate.model import FusionModel, Row, RowData, row_loglik, sample_prior
+from lfdfuse.estimate.resampling import gather, resample
+from lfdfuse.estimate.smc_kernels import (
+    MOVE_FRAME,
+    MOVE_PROPOSE,
+    NEXT_DELTA,
+    move_frame_reference,
+    move_propose_reference,
+    next_delta_reference,
+)
 
 
 @dataclass(frozen=True)
@@ -230,40 +238,32 @@ class TemperedSMC:
     def _next_delta(self, active: np.ndarray) -> np.ndarray:
         """Per chain the temperature increment that brings the ESS to the target (bisection)."""
         target = self.params.ess_target * self.ll.shape[1]
-        hi = np.where(active, 1.0 - self.beta, 0.0)
-        ok = ess(hi[:, None] * self.ll) >= target
-        lo = np.zeros_like(hi)
-        top = hi.copy()
-        for _ in range(30):
-            mid = 0.5 * (lo + top)
-            good = ess(mid[:, None] * self.ll) >= target
-            lo = np.where(good, mid, lo)
-            top = np.where(good, top, mid)
-        # never stall: a chain whose every step would collapse still advances a little
-        return np.where(ok, hi, np.maximum(lo, np.minimum(hi, 1e-6)))
+        room = np.where(active, 1.0 - self.beta, 0.0)
+        if NEXT_DELTA.ready():
+            return np.asarray(NEXT_DELTA(np.ascontiguousarray(self.ll), room, float(target)))
+        return next_delta_reference(self.ll, room, target)
 
     def _move(self, active: np.ndarray) -> None:
         """One random-walk Metropolis step in additive-log-ratio coordinates for active chains."""
         if not active.any():
             return
         c, m, n = self.logw.shape
-        mask = self.mask[:, None, :]
-        mean_w = np.where(self.mask, np.exp(self.logw).mean(axis=1), -1.0)
-        ref = np.argmax(mean_w, axis=1)  # the heaviest behaviour is the denominator
-        lref = np.take_along_axis(self.logw, ref[:, None, None], axis=2)
-        y = np.where(mask, self.logw - lref, 0.0)  # (C, M, n); y_ref = 0
-        d = y - y.mean(axis=1, keepdims=True)
-        cov = np.einsum("cmi,cmj->cij", d, d) / max(1, m - 1) + 1e-8 * np.eye(n)
+        compiled = n <= 128 and MOVE_FRAME.ready() and MOVE_PROPOSE.ready()
+        if compiled:
+            ref, y, cov = MOVE_FRAME(self.logw, self.mask, active)
+        else:
+            ref, y, cov = move_frame_reference(self.logw, self.mask)
         chol = np.linalg.cholesky(cov)
-        free = self.mask.copy()
-        free[np.arange(c), ref] = False
         z = self.rng.standard_normal((c, m, n))
-        step = np.einsum("cij,cmj->cmi", chol, z) * self.scale[:, None, None]
-        y_new = np.where(free[:, None, :], y + step, np.where(mask, y, -np.inf))
-        logw_new = y_new - logsumexp_last(y_new, keepdims=True)
+        if compiled:
+            logw_new, prior, prior_new = MOVE_PROPOSE(
+                y, self.logw, self.mask, ref, chol, z, self.scale, float(self.model.alpha), active
+            )
+        else:
+            logw_new, prior, prior_new = move_propose_reference(
+                y, self.logw, self.mask, ref, chol, z, self.scale, self.model.alpha
+            )
         ll_new = self._loglik(logw_new, active)
-        prior = log_prior_alr(self.logw, mask, self.model)
-        prior_new = log_prior_alr(logw_new, mask, self.model)
         log_a = self.beta[:, None] * (ll_new - self.ll) + prior_new - prior
         acc = (np.log(self.rng.uniform(0.0, 1.0, (c, m))) < log_a) & active[:, None]
         self.logw = np.where(acc[:, :, None], logw_new, self.logw)

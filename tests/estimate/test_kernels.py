@@ -8,13 +8,14 @@ is the numpy it must agree with, on the same inputs, to 1e-12.
 from __future__ import annotations
 
 import math
+import platform
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse.estimate import kernels, model
+from lfdfuse.estimate import kernels, model, smc_kernels
 from lfdfuse.estimate.model import RowData, sum_cos, sum_cos_reference
 
 needs_numba = pytest.mark.skipif(not kernels.SUM_COS.ready(), reason="numba kernels unavailable here")
@@ -74,7 +75,7 @@ def test_the_loop_itself_is_the_reference_in_plain_python() -> None:
     data, _ = _row(rng, 40, 3, True)
     w = rng.dirichlet(np.full(3, 0.5), 7)
     wt = np.ascontiguousarray(w.T)
-    got = kernels._sum_cos_loop(data.along, data.across, wt, 16)
+    got = kernels._sum_cos_loop(data.along, data.across, wt, 16, kernels.behaviour_width(3))
     np.testing.assert_allclose(got, sum_cos_reference(data, w), rtol=0.0, atol=1e-12)
 
 
@@ -224,3 +225,162 @@ def test_compiled_log_marginal_skips_only_exact_zeros(seed: int, steps: int, par
         want[p] = top + math.log(acc) - math.log(len(terms))
     assert got.tobytes() == want.tobytes()
     np.testing.assert_allclose(got, model.log_marginal(s, steps, m), rtol=0.0, atol=1e-12)
+
+
+def _particles(
+    rng: np.random.Generator, chains: int, m: int, n: int, padded: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """Log-weights ``(C, M, n)`` of Dirichlet particles and the behaviours' mask ``(C, n)`` (rows of
+    fewer behaviours padded with −inf, as the sampler pads them)."""
+    sizes = rng.integers(1 if padded else n, n + 1, chains)
+    mask = np.arange(n)[None, :] < sizes[:, None]
+    logw = np.full((chains, m, n), -np.inf)
+    for c in range(chains):
+        k = int(sizes[c])
+        logw[c, :, :k] = np.log(np.maximum(rng.dirichlet(np.full(k, 0.5), m), 1e-300))
+    return logw, mask
+
+
+@needs_numba
+@settings(max_examples=80, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(1, 6),
+    st.sampled_from([1, 2, 3, 17, 64, 384]),
+    st.integers(1, 20),
+    st.booleans(),
+)
+def test_compiled_move_agrees_with_the_reference(
+    seed: int, chains: int, m: int, n: int, padded: bool
+) -> None:
+    """A Metropolis move's frame (reference behaviour, log-ratio coordinates, covariance) and
+    proposal (log-weights and log priors) against the numpy steps they replace: to 1e-12, and on
+    x86-64 (the reductions' order known) to the bit."""
+    assert smc_kernels.MOVE_FRAME.ready() and smc_kernels.MOVE_PROPOSE.ready()
+    rng = np.random.default_rng(seed)
+    logw, mask = _particles(rng, chains, m, n, padded)
+    active = np.ones(chains, dtype=bool)
+    ref, y, cov = smc_kernels.MOVE_FRAME(logw, mask, active)
+    want_ref, want_y, want_cov = smc_kernels.move_frame_reference(logw, mask)
+    assert np.array_equal(ref, want_ref)
+    np.testing.assert_allclose(y, want_y, rtol=0.0, atol=1e-12)
+    np.testing.assert_allclose(cov, want_cov, rtol=1e-12, atol=1e-12)
+    chol = np.linalg.cholesky(want_cov)
+    z = rng.standard_normal(logw.shape)
+    scale = rng.uniform(0.05, 3.0, chains)
+    got = smc_kernels.MOVE_PROPOSE(want_y, logw, mask, want_ref, chol, z, scale, 0.5, active)
+    want = smc_kernels.move_propose_reference(want_y, logw, mask, want_ref, chol, z, scale, 0.5)
+    for g, w in zip(got, want, strict=True):
+        assert g.shape == w.shape
+        np.testing.assert_allclose(g, w, rtol=1e-12, atol=1e-12)
+    if platform.machine() in ("x86_64", "AMD64"):
+        assert y.tobytes() == want_y.tobytes() and cov.tobytes() == want_cov.tobytes()
+        assert all(g.tobytes() == w.tobytes() for g, w in zip(got, want, strict=True))
+
+
+@needs_numba
+def test_the_compiled_move_leaves_inactive_chains_as_they_are() -> None:
+    """A frozen chain's particles are not proposed: its log-weights come back unchanged and its
+    prior equal before and after (the sampler accepts nothing there)."""
+    rng = np.random.default_rng(2)
+    logw, mask = _particles(rng, 4, 32, 5, True)
+    active = np.array([True, False, True, False])
+    ref, y, cov = smc_kernels.MOVE_FRAME(logw, mask, active)
+    chol = np.linalg.cholesky(cov)
+    z = rng.standard_normal(logw.shape)
+    logw_new, prior, prior_new = smc_kernels.MOVE_PROPOSE(
+        y, logw, mask, ref, chol, z, np.ones(4), 0.5, active
+    )
+    assert np.array_equal(logw_new[~active], logw[~active])
+    assert np.array_equal(prior[~active], prior_new[~active])
+    assert not np.array_equal(logw_new[active], logw[active])
+    want = smc_kernels.move_propose_reference(y, logw, mask, ref, chol, z, np.ones(4), 0.5)
+    np.testing.assert_allclose(logw_new[active], want[0][active], rtol=0.0, atol=1e-12)
+
+
+@needs_numba
+def test_the_sampler_with_compiled_moves_gives_the_reference_draws(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A whole pass (rows of 2 to 12 behaviours, padded, trials finishing apart) with the compiled
+    moves and with the numpy ones: the same draws, to the bit on x86-64."""
+    from lfdfuse.estimate import smc
+    from lfdfuse.estimate.smc import SMCParams, TemperedSMC
+
+    rng = np.random.default_rng(4)
+    rows = []
+    for n, t in ((3, 80), (5, 200), (2, 30), (9, 50), (12, 40)):
+        vectors = rng.normal(0.0, 0.6, (t, n, 2))
+        w = rng.dirichlet(np.full(n, 0.5))
+        demo = np.einsum("tnk,n->tk", vectors, w) + rng.normal(0.0, 0.1, (t, 2))
+        rows.append(model.row_data(vectors, demo))
+
+    def run() -> smc.SMCResult:
+        return TemperedSMC(
+            rows,
+            trials=3,
+            model=model.FusionModel(),
+            params=SMCParams(particles=48),
+            rng=np.random.default_rng(5),
+        ).run()
+
+    class NotCompiled:
+        def ready(self) -> bool:
+            return False
+
+    fast = run()
+    monkeypatch.setattr(smc, "MOVE_FRAME", NotCompiled())  # the numpy moves, the same likelihood
+    ref = run()
+    assert fast.iterations == ref.iterations
+    np.testing.assert_allclose(np.exp(fast.logw), np.exp(ref.logw), rtol=0.0, atol=1e-9)
+    if platform.machine() in ("x86_64", "AMD64"):
+        assert fast.logw.tobytes() == ref.logw.tobytes()
+        assert fast.log_evidence.tobytes() == ref.log_evidence.tobytes()
+
+
+@needs_numba
+@settings(max_examples=25, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1), st.integers(1, 300), st.integers(1, 8), st.integers(1, 700), st.integers(2, 5)
+)
+def test_a_rows_likelihood_shared_over_threads_is_the_same_bits(
+    seed: int, steps: int, n: int, particles: int, cores: int
+) -> None:
+    """The particles of a long row are shared out over the cores: every particle's likelihood is
+    the bits one thread gives it (and the numpy reference's to 1e-12), whatever the split."""
+    rng = np.random.default_rng(seed)
+    data, _ = _row(rng, steps, n, True)
+    w = rng.dirichlet(np.full(n, 0.5), particles)
+    m = model.FusionModel()
+    one = model.row_loglik(data, w, m)  # compiles this width: the split needs it warm
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(kernels, "SPLIT_WORK", 1)
+        patch.setattr(kernels, "_cores", lambda: cores)
+        shared = model.row_loglik(data, w, m)
+    assert shared.tobytes() == one.tobytes()
+    want = model.log_marginal(sum_cos_reference(data, w), data.steps, m)
+    np.testing.assert_allclose(shared, want, rtol=1e-13, atol=1e-12)
+
+
+@needs_numba
+@settings(max_examples=80, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(1, 6),
+    st.sampled_from([1, 2, 3, 5, 17, 64, 129, 384, 1000, 1536]),
+    st.floats(0.0, 4.0),
+    st.sampled_from([0.3, 0.5, 0.9]),
+)
+def test_compiled_tempering_step_agrees_with_the_reference(
+    seed: int, chains: int, m: int, spread: float, share: float
+) -> None:
+    """The adaptive temperature step (the ESS bisection) against numpy's: to 1e-12, and on x86-64
+    (numpy's sums' order known) to the bit — a step decides every later draw."""
+    assert smc_kernels.NEXT_DELTA.ready()
+    rng = np.random.default_rng(seed)
+    ll = rng.normal(0.0, 10.0**spread, (chains, m)) - rng.uniform(0.0, 1e4, (chains, 1))
+    room = rng.uniform(0.0, 1.0, chains) * (rng.uniform(size=chains) < 0.8)  # some chains done
+    got = smc_kernels.NEXT_DELTA(ll, room, share * m)
+    want = smc_kernels.next_delta_reference(ll, room, share * m)
+    np.testing.assert_allclose(got, want, rtol=0.0, atol=1e-12)
+    assert np.all((got >= 0.0) & (got <= room))
+    if platform.machine() in ("x86_64", "AMD64"):
+        assert got.tobytes() == want.tobytes()
