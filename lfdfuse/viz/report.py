@@ -47,6 +47,11 @@ def write_report(results: PaperResults, rows: Sequence[Row], *, out: Path) -> Re
         save_figure(fig, out / name)
         figs.append(ReportFigure(name, caption))
     data = numbers(results, rows, figures=[{"file": f.file, "caption": f.caption} for f in figs])
-    write_text_atomic(out / "report.json", json.dumps(data, indent=1, allow_nan=False) + "\n")
+    write_text_atomic(out / "report.json", report_json(data))
     write_index(out / "index.html", figures=figs, rows=rows, numbers=data)
     return ReportResult(str(out), tuple(figs), tuple(rows), data)
+
+
+def report_json(data: dict[str, Any]) -> str:
+    """``report.json``'s text: every number of the report (:func:`numbers`), as written."""
+    return json.dumps(data, indent=1, allow_nan=False) + "\n"

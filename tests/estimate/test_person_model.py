@@ -5,10 +5,12 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
+from lfdfuse.estimate import pooled_estimate
 from lfdfuse.estimate.hierarchy import SPREADS, centre_of, hierarchical_rows
 from lfdfuse.estimate.methods import EstimateOptions, RowEstimate
-from lfdfuse.estimate.person import CANDIDATES
+from lfdfuse.estimate.person import CANDIDATES, PersonChoice
 from lfdfuse.estimate.pipeline import estimate_run
 from lfdfuse.estimate.segments import estimate_segments, run_rng
 from lfdfuse.segment.goals import GoalSegment
@@ -85,7 +87,9 @@ def _varying_run(n: int, truth: float, recorded: str) -> SegmentedRun:
     )
 
 
-def test_the_demo_chooses_its_command_model_by_predicting_its_own_decisions() -> None:
+def test_the_demo_chooses_its_command_model_by_predicting_its_own_decisions(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     run = _varying_run(240, 0.7, "auto")
     opts = EstimateOptions(select_model=True)
     est = estimate_segments(run, opts=opts, rng=run_rng(run, opts))
@@ -99,7 +103,18 @@ def test_the_demo_chooses_its_command_model_by_predicting_its_own_decisions() ->
     ] == min(errors.values())
     w = est.steps[0].fusion[0].weights
     assert abs(w["wander_left"] - 0.7) < 0.05, w
+    # the table asks the same chooser of the same demo (cross-validation is the dear part of an
+    # estimate: made once here, above); it records the choice and learns with it
+    asked: list[SegmentedRun] = []
+
+    def chosen(demo: SegmentedRun, *_: object) -> PersonChoice | None:
+        asked.append(demo)
+        return est.person
+
+    monkeypatch.setattr(pooled_estimate, "choose_person_model", chosen)
     table, _, _ = estimate_run(run, opts=opts)
+    assert len(asked) == 1 and asked[0] is run
+    assert table.estimated_by["person_model"] == est.person.provenance()
     assert table.estimated_by["person_model"]["chosen"].startswith(est.person.mode)
     # without the option the detected model, and no choice recorded
     plain, _, _ = estimate_run(run, opts=EstimateOptions())
