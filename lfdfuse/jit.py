@@ -8,7 +8,8 @@ that is not writable), so only the first run after an install compiles.
 
 A compiled loop cannot call a plain Python function: a helper it calls is named in ``calls``
 (``kernel(loop, calls=[helper])``), compiled with it, and the loop sees the compiled helper under
-the helper's own name (the module keeps the plain function).
+the helper's own name (the module keeps the plain function); a helper may call the helpers named
+before it.
 
 ``LFDFUSE_KERNELS=numpy`` runs every reference instead (the tests compare the two; the
 benchmarks time both in one run). When numba is missing or a kernel fails to compile, the
@@ -192,10 +193,21 @@ def _with_compiled(
     code = getattr(fn, "__code__", None)
     if code is None:
         raise TypeError(f"{fn!r} is not a plain function: it cannot call compiled helpers")
-    names = {h.__name__: jit(h) for h in calls}
-    missing = sorted(set(names) - set(code.co_names))
+    names: dict[str, Any] = {}
+    for h in calls:  # in order: a helper may call the helpers named before it
+        names[h.__name__] = jit(_rebound(h, names))
+    used = set(code.co_names).union(*(h.__code__.co_names for h in calls))
+    missing = sorted(set(names) - used)
     if missing:
         raise TypeError(f"{fn.__name__} calls no {', '.join(missing)}")
+    return _rebound(fn, names)
+
+
+def _rebound(fn: Callable[..., Any], names: dict[str, Any]) -> Callable[..., Any]:
+    """``fn`` over a copy of its module's globals in which ``names`` stand (the same code)."""
+    code = fn.__code__
+    if not any(n in code.co_names for n in names):
+        return fn
     copy = types.FunctionType(code, {**fn.__globals__, **names}, fn.__name__, fn.__defaults__, fn.__closure__)
     copy.__qualname__ = fn.__qualname__
     copy.__module__ = fn.__module__

@@ -18,6 +18,7 @@ from typing import Protocol
 import numpy as np
 
 from lfdfuse.jit import kernel
+from lfdfuse.pairwise import STACK, pairwise_sum
 
 
 class RowSteps(Protocol):
@@ -199,10 +200,10 @@ def _logsumexp_rows_loop(a: np.ndarray) -> np.ndarray:
     rows, length = a.shape
     out = np.empty(rows)
     buf = np.empty(max(length, 1))
-    stack_lo = np.empty(64, dtype=np.int64)
-    stack_n = np.empty(64, dtype=np.int64)
-    stack_st = np.empty(64, dtype=np.int64)
-    vals = np.empty(64)
+    stack_lo = np.empty(STACK, dtype=np.int64)
+    stack_n = np.empty(STACK, dtype=np.int64)
+    stack_st = np.empty(STACK, dtype=np.int64)
+    vals = np.empty(STACK)
     sums = np.zeros(2)
     for i in range(rows):
         top = -np.inf
@@ -225,64 +226,7 @@ def _logsumexp_rows_loop(a: np.ndarray) -> np.ndarray:
                     buf[j] = math.exp((-np.inf if x == top else x) - top)
                 else:
                     buf[j] = math.exp(x)
-            # numpy's pairwise sum of buf[:length] (post-order over its split tree)
-            vp = 0
-            stack_lo[0] = 0
-            stack_n[0] = length
-            stack_st[0] = 0
-            sp = 1
-            while sp > 0:
-                lo = stack_lo[sp - 1]
-                cnt = stack_n[sp - 1]
-                if cnt <= 128:
-                    sp -= 1
-                    if cnt < 8:
-                        res = 0.0
-                        for k in range(cnt):
-                            res += buf[lo + k]
-                    else:
-                        a0 = buf[lo]
-                        a1 = buf[lo + 1]
-                        a2 = buf[lo + 2]
-                        a3 = buf[lo + 3]
-                        a4 = buf[lo + 4]
-                        a5 = buf[lo + 5]
-                        a6 = buf[lo + 6]
-                        a7 = buf[lo + 7]
-                        k = 8
-                        stop = cnt - cnt % 8
-                        while k < stop:
-                            a0 += buf[lo + k]
-                            a1 += buf[lo + k + 1]
-                            a2 += buf[lo + k + 2]
-                            a3 += buf[lo + k + 3]
-                            a4 += buf[lo + k + 4]
-                            a5 += buf[lo + k + 5]
-                            a6 += buf[lo + k + 6]
-                            a7 += buf[lo + k + 7]
-                            k += 8
-                        res = ((a0 + a1) + (a2 + a3)) + ((a4 + a5) + (a6 + a7))
-                        while k < cnt:
-                            res += buf[lo + k]
-                            k += 1
-                    vals[vp] = res
-                    vp += 1
-                elif stack_st[sp - 1] == 0:
-                    stack_st[sp - 1] = 1
-                    half = cnt // 2
-                    half -= half % 8
-                    stack_lo[sp] = lo + half
-                    stack_n[sp] = cnt - half
-                    stack_st[sp] = 0
-                    stack_lo[sp + 1] = lo
-                    stack_n[sp + 1] = half
-                    stack_st[sp + 1] = 0
-                    sp += 2
-                else:
-                    sp -= 1
-                    vals[vp - 2] = vals[vp - 2] + vals[vp - 1]
-                    vp -= 1
-            sums[pass_] = 0.0 + vals[0]
+            sums[pass_] = pairwise_sum(buf, length, stack_lo, stack_n, stack_st, vals)
             if pass_ == 0:
                 s = sums[0]
                 s = s if s == 0 else s / count
@@ -301,7 +245,7 @@ def _logsumexp_rows_loop(a: np.ndarray) -> np.ndarray:
 
 
 #: :func:`_logsumexp_rows_loop`, compiled on first use
-LOGSUMEXP_ROWS = kernel(_logsumexp_rows_loop)
+LOGSUMEXP_ROWS = kernel(_logsumexp_rows_loop, calls=[pairwise_sum])
 
 
 def logsumexp_last(a: np.ndarray, *, keepdims: bool = False) -> np.ndarray:

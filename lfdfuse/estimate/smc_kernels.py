@@ -18,6 +18,7 @@ import numpy as np
 
 from lfdfuse.estimate.kernels import _logsumexp_rows_loop, logsumexp_last
 from lfdfuse.jit import kernel
+from lfdfuse.pairwise import STACK, pairwise_sum
 
 
 def move_frame_reference(logw: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -59,40 +60,6 @@ def move_propose_reference(
     prior = alpha * np.where(mask3, logw, 0.0).sum(axis=-1)
     prior_new = alpha * np.where(mask3, logw_new, 0.0).sum(axis=-1)
     return np.asarray(logw_new), np.asarray(prior), np.asarray(prior_new)
-
-
-def _short_sum(x: np.ndarray, n: int) -> float:
-    """numpy's pairwise sum of ``x[:n]`` for ``n ≤ 128`` (one leaf: eight running sums)."""
-    if n < 8:
-        res = 0.0
-        for i in range(n):
-            res += x[i]
-        return res
-    r0 = x[0]
-    r1 = x[1]
-    r2 = x[2]
-    r3 = x[3]
-    r4 = x[4]
-    r5 = x[5]
-    r6 = x[6]
-    r7 = x[7]
-    i = 8
-    stop = n - n % 8
-    while i < stop:
-        r0 += x[i]
-        r1 += x[i + 1]
-        r2 += x[i + 2]
-        r3 += x[i + 3]
-        r4 += x[i + 4]
-        r5 += x[i + 5]
-        r6 += x[i + 6]
-        r7 += x[i + 7]
-        i += 8
-    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        res += x[i]
-        i += 1
-    return float(res)
 
 
 def _move_frame_loop(
@@ -169,12 +136,16 @@ def _move_propose_loop(
     prior = np.zeros((c_count, m))
     prior_new = np.zeros((c_count, m))
     row = np.empty(n)
+    stack_lo = np.empty(STACK, dtype=np.int64)
+    stack_n = np.empty(STACK, dtype=np.int64)
+    stack_st = np.empty(STACK, dtype=np.int64)
+    vals = np.empty(STACK)
     for c in range(c_count):
         r = ref[c]
         for p in range(m):
             for i in range(n):
                 row[i] = logw[c, p, i] if mask[c, i] else 0.0
-            prior[c, p] = alpha * _short_sum(row, n)
+            prior[c, p] = alpha * pairwise_sum(row, n, stack_lo, stack_n, stack_st, vals)
         if not active[c]:
             for p in range(m):
                 prior_new[c, p] = prior[c, p]
@@ -209,12 +180,12 @@ def _move_propose_loop(
                 v = y_new[p, i] - lse[p]
                 logw_new[c, p, i] = v
                 row[i] = v if mask[c, i] else 0.0
-            prior_new[c, p] = alpha * _short_sum(row, n)
+            prior_new[c, p] = alpha * pairwise_sum(row, n, stack_lo, stack_n, stack_st, vals)
     return logw_new, prior, prior_new
 
 
 #: :func:`_move_propose_loop`, compiled on first use
-MOVE_PROPOSE = kernel(_move_propose_loop, calls=[_short_sum, _logsumexp_rows_loop])
+MOVE_PROPOSE = kernel(_move_propose_loop, calls=[pairwise_sum, _logsumexp_rows_loop])
 
 
 def next_delta_reference(ll: np.ndarray, room: np.ndarray, target: float) -> np.ndarray:
@@ -244,10 +215,10 @@ def _next_delta_loop(ll: np.ndarray, room: np.ndarray, target: float) -> np.ndar
     c_count, m = ll.shape
     out = np.empty(c_count)
     w = np.empty(max(m, 1))
-    stack_lo = np.empty(64, dtype=np.int64)
-    stack_n = np.empty(64, dtype=np.int64)
-    stack_st = np.empty(64, dtype=np.int64)
-    vals = np.empty(64)
+    stack_lo = np.empty(STACK, dtype=np.int64)
+    stack_n = np.empty(STACK, dtype=np.int64)
+    stack_st = np.empty(STACK, dtype=np.int64)
+    vals = np.empty(STACK)
     for c in range(c_count):
         hi = room[c]
         lo = 0.0
@@ -270,63 +241,7 @@ def _next_delta_loop(ll: np.ndarray, room: np.ndarray, target: float) -> np.ndar
             shift = top if (top - top) == 0.0 else 0.0  # np.where(isfinite(top), top, 0)
             for p in range(m):
                 w[p] = math.exp(w[p] - shift)
-            vp = 0
-            stack_lo[0] = 0
-            stack_n[0] = m
-            stack_st[0] = 0
-            sp = 1
-            while sp > 0:
-                base = stack_lo[sp - 1]
-                cnt = stack_n[sp - 1]
-                if cnt <= 128:
-                    sp -= 1
-                    if cnt < 8:
-                        res = 0.0
-                        for k in range(cnt):
-                            res += w[base + k]
-                    else:
-                        a0 = w[base]
-                        a1 = w[base + 1]
-                        a2 = w[base + 2]
-                        a3 = w[base + 3]
-                        a4 = w[base + 4]
-                        a5 = w[base + 5]
-                        a6 = w[base + 6]
-                        a7 = w[base + 7]
-                        k = 8
-                        stop = cnt - cnt % 8
-                        while k < stop:
-                            a0 += w[base + k]
-                            a1 += w[base + k + 1]
-                            a2 += w[base + k + 2]
-                            a3 += w[base + k + 3]
-                            a4 += w[base + k + 4]
-                            a5 += w[base + k + 5]
-                            a6 += w[base + k + 6]
-                            a7 += w[base + k + 7]
-                            k += 8
-                        res = ((a0 + a1) + (a2 + a3)) + ((a4 + a5) + (a6 + a7))
-                        while k < cnt:
-                            res += w[base + k]
-                            k += 1
-                    vals[vp] = res
-                    vp += 1
-                elif stack_st[sp - 1] == 0:
-                    stack_st[sp - 1] = 1
-                    half = cnt // 2
-                    half -= half % 8
-                    stack_lo[sp] = base + half
-                    stack_n[sp] = cnt - half
-                    stack_st[sp] = 0
-                    stack_lo[sp + 1] = base
-                    stack_n[sp + 1] = half
-                    stack_st[sp + 1] = 0
-                    sp += 2
-                else:
-                    sp -= 1
-                    vals[vp - 2] = vals[vp - 2] + vals[vp - 1]
-                    vp -= 1
-            total = vals[0]
+            total = pairwise_sum(w, m, stack_lo, stack_n, stack_st, vals)
             for p in range(m):
                 w[p] = w[p] / total
             lane0 = 0.0
@@ -358,4 +273,4 @@ def _next_delta_loop(ll: np.ndarray, room: np.ndarray, target: float) -> np.ndar
 
 
 #: :func:`_next_delta_loop`, compiled on first use
-NEXT_DELTA = kernel(_next_delta_loop)
+NEXT_DELTA = kernel(_next_delta_loop, calls=[pairwise_sum])
