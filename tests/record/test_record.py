@@ -51,6 +51,8 @@ def test_record_a_person_over_dds_and_learn_keep_left(tmp_path: Path, domain: in
         "100",
         "--command-timeout",
         "0.2",
+        "--speed",
+        "3",  # 30 scans a second: a person's robot three times over (unpaced, a loaded machine lost samples)
         "--wait-for-listener",
     )
     try:
@@ -65,7 +67,9 @@ def test_record_a_person_over_dds_and_learn_keep_left(tmp_path: Path, domain: in
         robot.stop()
     s = got["s"]
     assert r["collisions"] == 0 and r["ticks"] == 1000
-    assert s.connections == 1 and s.received["cmd"] >= 950 and s.received["scan"] >= 950
+    assert s.received["cmd"] >= 950 and s.received["scan"] >= 950
+    # one link; the robot leaving at its end may be seen (and sought again) before the stop
+    assert s.connections == 1 or (s.connections == 2 and set(s.warnings) == {"lost 1"}), s
     # import's channels and provenance, teacher: human, and who drove
     report = json.loads(mcap_check(demo))
     assert report["ok"] and set(report["counts"]) == IMPORT_CHANNELS

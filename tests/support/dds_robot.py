@@ -10,7 +10,8 @@ the robot's left), ``rt/odom`` (``nav_msgs/Odometry``, best effort), ``rt/tf`` (
 the wall time since the start, the robot's clock, as its steps are not 0.1 s apart).
 
 Pacing: ``--lockstep`` steps as soon as a command answers a scan (a minute of robot time in
-seconds, the same closed loop); else the robot runs at ``--speed`` × real time. ``--person STYLE``
+seconds, the same closed loop; with ``--speed``, no faster than that × real time); else the robot
+runs at ``--speed`` × real time (default 1). ``--person STYLE``
 adds a scripted person driving it with their own teleop: another participant
 (``teleop_twist_keyboard``) that publishes the style teacher's Twist on ``rt/cmd_vel`` each tick.
 Faults: ``--pause-at T --pause-for S`` (scans stop), ``--malformed-at T`` (samples on ``rt/scan``
@@ -243,8 +244,11 @@ class Robot:
                 self.w_person.write(idl.Twist(idl.Vector3(v, 0.0, 0.0), idl.Vector3(0.0, 0.0, w)))
             if (a.lockstep or self.person is not None) and not paused:
                 got = self._take(a.command_timeout)
+                if a.speed is not None:  # no faster than --speed × real time
+                    t_next += dt / a.speed
+                    time.sleep(max(0.0, t_next - time.monotonic()))
             else:
-                t_next += dt / a.speed
+                t_next += dt / (a.speed or 1.0)
                 got = self._take(t_next - time.monotonic())
                 time.sleep(max(0.0, t_next - time.monotonic()))
             for wall, v, w in got:
@@ -288,7 +292,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--seconds", type=float, default=60.0)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--lockstep", action="store_true")
-    ap.add_argument("--speed", type=float, default=1.0)
+    ap.add_argument("--speed", type=float, default=None)
     ap.add_argument("--command-timeout", type=float, default=1.0)
     ap.add_argument("--wait-for-driver", action="store_true", help="start once a command writer is matched")
     ap.add_argument("--wait-for-listener", action="store_true", help="start once a scan reader is matched")
