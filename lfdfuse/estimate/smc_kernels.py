@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from lfdfuse.estimate.kernels import _logsumexp_rows_loop, logsumexp_last
+from lfdfuse.estimate.resampling import ess
 from lfdfuse.jit import kernel
 from lfdfuse.pairwise import STACK, pairwise_sum
 
@@ -193,8 +194,6 @@ def next_delta_reference(ll: np.ndarray, room: np.ndarray, target: float) -> np.
     incremental weights ``L^δ`` to ``target``, ``δ`` at most ``room (C,)``: all of it when that
     keeps the ESS at the target, else 30 bisections (and never below ``min(room, 1e-6)``: a
     chain whose every step collapses still advances). ``ll (C, M)``: the particles' log-likelihoods."""
-    from lfdfuse.estimate.resampling import ess
-
     ok = ess(room[:, None] * ll) >= target
     lo = np.zeros_like(room)
     top = room.copy()
