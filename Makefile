@@ -4,7 +4,7 @@ PY := $(VENV)/bin/python
 LFD := $(VENV)/bin/lfdfuse
 DEMO := build/demo
 
-.PHONY: demo test fuzz lint bench sample-logs install clean paper
+.PHONY: demo test warm fuzz lint bench sample-logs install clean paper
 
 $(VENV)/.installed: pyproject.toml
 	test -x $(PY) || python3 -m venv $(VENV)
@@ -30,11 +30,16 @@ demo: install
 	$(PY) -m tests.support.demo_check $(DEMO)
 
 # on every core (pytest-xdist; work stealing, so one long closed loop does not hold the rest back)
-# byte-compiled first: every command a test starts imports lfdfuse again, and where the environment
-# says PYTHONDONTWRITEBYTECODE each of them would compile its sources (~0.2 s of CPU a process)
-test: install
-	$(PY) -m compileall -q lfdfuse tests > /dev/null
+test: warm
 	$(PY) -m pytest -n auto --dist worksteal
+
+# before the tests: byte-compiled (every command a test starts imports lfdfuse again, and where the
+# environment says PYTHONDONTWRITEBYTECODE each would compile its sources, ~0.2 s of CPU a process),
+# and numba's kernels compiled once into their cache, where each test process would compile them
+# again (nothing runs when the cache holds them); .ci/run does this beside the linter
+warm: install
+	$(PY) -m compileall -q lfdfuse tests > /dev/null
+	$(PY) -m tests.support.warm
 
 # the whole hostile corpus (tests/hostile; make test runs a sample of every class)
 fuzz: install

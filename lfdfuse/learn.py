@@ -40,7 +40,7 @@ from lfdfuse.segment.read import SegmentedRun, network_steps, read_segmented, re
 from lfdfuse.segment.track import LandmarkTrack
 from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import Leg
-from lfdfuse.world.model import World
+from lfdfuse.world.parse import World
 
 #: a segmented correction log (``teleop --table``) says how many ticks its network drove
 CORRECTION_KEY = "segment_network_ticks"

@@ -15,7 +15,7 @@ import pkgutil
 from lfdfuse.behaviors import library
 from lfdfuse.behaviors.spec import ATTRACT, BehaviorSpec, Input, attract_target
 from lfdfuse.errors import ConfigError
-from lfdfuse.world.model import TARGET_COLORS
+from lfdfuse.world.parse import TARGET_COLORS
 
 
 def _gather() -> tuple[BehaviorSpec, ...]:

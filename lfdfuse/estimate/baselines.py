@@ -1,11 +1,13 @@
 """Baselines beside the sampler: non-negative least squares, a least-squares heading fit on the
-simplex, and arbitration (the best single behaviour, the pre-fusion approach)."""
+simplex, and arbitration (the best single behaviour, the pre-fusion approach).
+
+scipy.optimize is imported where a baseline is fitted: every command that names the methods
+(``inspect``, ``plot``, ``execute``'s summary) imports this module, and only a fit needs it.
+"""
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import least_squares
-from scipy.optimize import nnls as _nnls
 
 from lfdfuse.estimate.model import row_data
 
@@ -20,9 +22,11 @@ def nnls_weights(vectors: np.ndarray, demo: np.ndarray) -> np.ndarray:
     >>> nnls_weights(np.array([[[1.0, 0.0], [0.0, 1.0]]]), np.array([[1.0, 0.0]])).round(6).tolist()
     [1.0, 0.0]
     """
+    from scipy.optimize import nnls
+
     t, n, _ = vectors.shape
     a = vectors.transpose(0, 2, 1).reshape(2 * t, n)
-    return np.asarray(_nnls(a, demo.reshape(2 * t))[0])
+    return np.asarray(nnls(a, demo.reshape(2 * t))[0])
 
 
 def angle_errors(vectors: np.ndarray, demo: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -39,6 +43,8 @@ def heading_fit_weights(vectors: np.ndarray, demo: np.ndarray) -> np.ndarray:
     Several starts (uniform, NNLS, each vertex); the best local optimum wins. A baseline for
     round trips: where it lands close to the truth, the data pins the row.
     """
+    from scipy.optimize import least_squares
+
     t, n, _ = vectors.shape
     if n == 1 or t == 0:
         return np.full(n, 1.0 / n)

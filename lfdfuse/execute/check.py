@@ -28,8 +28,7 @@ from lfdfuse.sim.loop import run
 from lfdfuse.sim.robot import RobotParams
 from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.sim.simulator import Simulator
-from lfdfuse.world.model import World
-from lfdfuse.world.parse import check_pose_free, parse_world
+from lfdfuse.world.parse import World, check_pose_free, parse_world
 
 #: the teacher's path is checked at points this far apart along it ...
 SPACING_M = 0.5

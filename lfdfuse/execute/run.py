@@ -25,7 +25,7 @@ from lfdfuse.sim.loop import RunSummary, Sink, run
 from lfdfuse.sim.robot import RobotParams
 from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.sim.simulator import Simulator
-from lfdfuse.world.model import World
+from lfdfuse.world.parse import World
 
 
 @dataclass(frozen=True)

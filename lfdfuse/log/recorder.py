@@ -11,7 +11,7 @@ from lfdfuse.log import messages as msg
 from lfdfuse.log.writer import LogWriter
 from lfdfuse.robot.readings import Observation
 from lfdfuse.sim.sensors import SensorParams
-from lfdfuse.world.model import World
+from lfdfuse.world.parse import World
 
 
 def provenance(

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from lfdfuse.log.stamps import IDENTITY_POSE, MAP_FRAME, ROBOT_FRAME, quat_z, stamp
-from lfdfuse.world.model import World
+from lfdfuse.world.parse import World
 
 
 def _color(r: float, g: float, b: float, a: float = 1.0) -> dict[str, float]:

@@ -33,7 +33,7 @@ from lfdfuse.robot.readings import Observation, ScanGeometry
 from lfdfuse.sim.loop import side_beam_index
 from lfdfuse.sim.robot import RobotParams
 from lfdfuse.sim.sensors import SensorParams, target_reached
-from lfdfuse.world.model import World
+from lfdfuse.world.parse import World
 
 __all__ = ["HelpReason", "HelpRequest", "NetworkStepper", "help_reason", "weighted_targets"]
 

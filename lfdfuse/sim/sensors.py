@@ -9,7 +9,7 @@ import numpy as np
 
 from lfdfuse.robot.pose import Pose
 from lfdfuse.robot.readings import Detection, Reading, ScanGeometry
-from lfdfuse.world.model import World
+from lfdfuse.world.parse import World
 from lfdfuse.world.raycast import RayCaster
 
 

@@ -19,7 +19,7 @@ from lfdfuse.robot.pose import Pose
 from lfdfuse.robot.readings import Observation
 from lfdfuse.sim.robot import RobotParams, move
 from lfdfuse.sim.sensors import SensorParams, Sensors
-from lfdfuse.world.model import World, check_pose_free
+from lfdfuse.world.parse import World, check_pose_free
 
 
 class CommandSource(Protocol):

@@ -22,7 +22,7 @@ from scipy import ndimage
 from skimage.graph import MCP_Geometric
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.world.model import World
+from lfdfuse.world.parse import World
 from lfdfuse.world.raycast import near_pairs
 
 _NEIGHBOURS = ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1))

@@ -19,7 +19,7 @@ from lfdfuse.sources.planner import Planner
 from lfdfuse.sources.tasks import Leg
 from lfdfuse.sources.teachers import StyleTeacher, TeacherParams
 from lfdfuse.sources.typist import KeyboardParams, KeyboardPerson, PressRecorder
-from lfdfuse.world.model import World, check_pose_free
+from lfdfuse.world.parse import World, check_pose_free
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,7 @@ from lfdfuse.sim.robot import wrap_angle
 from lfdfuse.sim.sensors import CameraParams, target_reached
 from lfdfuse.sources.planner import Planner
 from lfdfuse.sources.tasks import Leg, parse_style, parse_task
-from lfdfuse.world.model import World
+from lfdfuse.world.parse import World
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,7 @@ from matplotlib.patches import Circle, Patch, Polygon
 from lfdfuse.evaluate.plot_data import PERSON_PART, PathData
 from lfdfuse.network.table import StepRows
 from lfdfuse.viz import colors
-from lfdfuse.world.model import World
+from lfdfuse.world.parse import World
 
 LEFT_COLOR = "#0072B2"
 RIGHT_COLOR = "#D55E00"

@@ -31,7 +31,7 @@ from lfdfuse.log.schemas import schema_text
 from lfdfuse.robot.readings import Observation
 from lfdfuse.sim.sensors import SensorParams
 from lfdfuse.sources.teleop.inputs import Input
-from lfdfuse.world.model import World
+from lfdfuse.world.parse import World
 
 CMD_TOPIC = "/cmd_vel"
 TWIST_SCHEMAS = ("geometry_msgs/Twist", "geometry_msgs/msg/Twist")

@@ -50,7 +50,7 @@ from lfdfuse.sources.teleop.inputs import (
 )
 from lfdfuse.sources.teleop.keys import KeyState, press
 from lfdfuse.sources.teleop.record import AuthorityRecorder, InputRecorder
-from lfdfuse.world.model import World, check_pose_free
+from lfdfuse.world.parse import World, check_pose_free
 
 #: a run without ``--duration`` still ends: two hours of driving is a very long demonstration
 MAX_DURATION_S = 7200.0

@@ -17,7 +17,7 @@ import numpy as np
 
 from lfdfuse.robot.pose import Pose
 from lfdfuse.robot.readings import ScanGeometry
-from lfdfuse.world.model import World
+from lfdfuse.world.parse import World
 
 WALL, LASER, TRAIL = "#", "*", "·"
 ARROWS = "→↗↑↖←↙↓↘"  # heading sectors of 45°, counter-clockwise from +x
