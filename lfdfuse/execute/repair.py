@@ -211,9 +211,20 @@ def repair(
     none of those (at most ``candidates``) does, try each goal segment with decisions the robot
     left the path in without them (the paper's step: the sub-goals may be what misleads)."""
     world, teacher_xy, max_time_s = home.world, home.teacher_xy, home.max_time_s
+    driven: list[tuple[FusionTable, tuple[Check, ...]]] = []
+
+    def checked(t: FusionTable) -> tuple[Check, ...]:
+        """The rollouts of ``t`` from every start; a table driven already (two amends may
+        refine to the same table) is not driven again: a rollout is deterministic."""
+        got = next((c for u, c in driven if u == t), None)
+        if got is None:
+            got = check_all(t, world, starts, teacher_xy, max_time_s)
+            driven.append((t, got))
+        return got
+
     amends = Amends()
     table, decisions = refine(amends)
-    best = check_all(table, world, starts, teacher_xy, max_time_s)
+    best = checked(table)
     checks = [best]
     for _ in range(rounds):
         cands: list[Amends] = []
@@ -239,7 +250,7 @@ def repair(
         for tried in (list(dict.fromkeys(cands))[:candidates], list(dict.fromkeys(plains))):
             for a in tried:
                 t, ds = refine(a)
-                got = check_all(t, world, starts, teacher_xy, max_time_s)
+                got = checked(t)
                 checks.append(got)
                 if score(got) > score(best):
                     best, found = got, (a, t, ds)

@@ -241,3 +241,41 @@ def test_blame_takes_a_corner_taken_in_two_only_when_no_whole_turn_is_near(
         assert got is not None and small[0] <= got < small[1]
     else:
         assert got is None
+
+
+def test_a_table_refined_again_from_other_amends_is_not_driven_again(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Two amends may refine to the same table; the check drives each table once (a rollout is
+    deterministic), and the table refined again is still one of the tables tried."""
+    import lfdfuse.execute.repair as repair_module
+    from lfdfuse.execute.check import DemoWorld
+    from lfdfuse.network.table import FusionRow, Network, Step
+    from lfdfuse.robot.pose import Pose
+    from lfdfuse.world.model import load_world
+
+    def table(weight: float) -> FusionTable:  # a new object each call: equal, never the same one
+        row = FusionRow(bac=1, weights={"avoid": weight, "attract_red": 1.0 - weight})
+        step = Step(name="red", goal="red", fusion=(row,))
+        return FusionTable(
+            ("avoid", "attract_red"), {"avoid": 0.5, "attract_red": 0.5}, Network("task", (step,))
+        )
+
+    driven: list[FusionTable] = []
+
+    def check_all(t: FusionTable, *_: object) -> tuple[Check, ...]:
+        driven.append(t)
+        return (Check(goals=0, met=5, points=10, missed_at=None, last_met_at=50),)
+
+    monkeypatch.setattr(repair_module, "check_all", check_all)
+    home = DemoWorld(load_world("corridor"), Pose(1.0, 1.0, 0.0), np.zeros((100, 2)), 10.0, goals=1)
+    track = LandmarkTrack.__new__(LandmarkTrack)  # not read: no rollout leaves the path
+    weights = {Amends(): 0.3, Amends(approach=(0,)): 0.3}
+    rep = repair(
+        lambda a: (table(weights.get(a, 0.7)), []),
+        track=track,
+        home=home,
+        starts=(home.start,),
+        segments=((0, 100),),
+        goal_segments=(0,),
+    )
+    assert len(rep.checks) == 2 and rep.checks[0] == rep.checks[1]  # the approach was tried
+    assert driven == [table(0.3)] and rep.amends == Amends() and not rep.changed
