@@ -258,3 +258,135 @@ def logsumexp_last(a: np.ndarray, *, keepdims: bool = False) -> np.ndarray:
     flat = np.ascontiguousarray(a).reshape(-1, a.shape[-1])
     out = LOGSUMEXP_ROWS(flat).reshape(a.shape[:-1] + ((1,) if keepdims else ()))
     return np.asarray(out)
+
+
+#: ``CDF_GRID / 2π`` of :func:`~lfdfuse.estimate.model._cdf_at` is computed from the grid passed in
+_TWO_PI = 2.0 * math.pi
+
+
+def _discrete_block_loop(
+    a: np.ndarray,
+    b: np.ndarray,
+    lo: np.ndarray,
+    width: np.ndarray,
+    lapse: np.ndarray,
+    keep: float,
+    table: np.ndarray,
+    ll: np.ndarray,
+    first: int,
+) -> None:
+    """One block of steps of :func:`~lfdfuse.estimate.model.discrete_log_marginal`, added into
+    ``ll (P′, J)`` in place: the fused components ``a, b (B, P)`` (the reference's BLAS
+    products), each step's interval start ``lo``, width ``hi − lo`` and lapse share ``λ/m``
+    ``(B,)``, ``keep = 1 − λ``, the CDF table ``(G + 1, J)``; particles ``first … first + P′``.
+
+    Operation for operation the reference's: the interval shifted by ``φ = atan2(b, a)`` with
+    numpy's remainder, each CDF by linear interpolation, the zero vector's ``width / 2π``, numpy's
+    clip to ``[0, 1]``, the lapse mixed in, the log; each node's logs summed over the block's steps
+    in order, then added into ``ll``. Each particle is computed on its own: a share of the
+    particles gives their bits."""
+    steps = a.shape[0]
+    p_count, j_count = ll.shape
+    grid = table.shape[0] - 1
+    scale = grid / _TWO_PI
+    part = np.empty((p_count, j_count))
+    for t in range(steps):
+        lo_t = lo[t]
+        w_t = width[t]
+        add = lapse[t]
+        # the logs every particle of this step may share: a probability of exactly 0 or 1 (the
+        # nodes of high κ, far from the interval or well inside it) and a zero vector's
+        log_none = math.log(0.0 * keep + add)
+        log_all = math.log(1.0 * keep + add)
+        flat = w_t / _TWO_PI
+        if flat == flat:  # numpy's clip: NaN stays NaN
+            flat = flat if flat > 0.0 else 0.0
+            flat = flat if flat < 1.0 else 1.0
+        log_flat = math.log(flat * keep + add)
+        for q in range(p_count):
+            p = first + q
+            at = a[t, p]
+            bt = b[t, p]
+            zero = math.hypot(at, bt) <= 1e-12
+            phi = math.atan2(bt, at)
+            low = (lo_t - phi + math.pi) % _TWO_PI - math.pi
+            high = low + w_t
+            wrapped = 0.0
+            if high > math.pi:
+                wrapped = 1.0
+                high = high - _TWO_PI
+            x = min(max(low, -math.pi), math.pi)  # no NaN here: a finite shift, clipped as numpy clips
+            pos_lo = (x + math.pi) * scale
+            i_lo = min(int(pos_lo), grid - 1)
+            f_lo = pos_lo - i_lo
+            x = min(max(high, -math.pi), math.pi)
+            pos_hi = (x + math.pi) * scale
+            i_hi = min(int(pos_hi), grid - 1)
+            f_hi = pos_hi - i_hi
+            for j in range(j_count):
+                if zero:
+                    v = log_flat
+                else:
+                    c_lo = table[i_lo, j]
+                    c_lo = c_lo + f_lo * (table[i_lo + 1, j] - c_lo)
+                    c_hi = table[i_hi, j]
+                    c_hi = c_hi + f_hi * (table[i_hi + 1, j] - c_hi)
+                    v = c_hi + wrapped - c_lo
+                    if v <= 0.0:  # clipped to 0 (−0.0 too: the same sum)
+                        v = log_none
+                    elif v >= 1.0:
+                        v = log_all
+                    else:  # NaN too: its log is NaN, as numpy's
+                        v = math.log(v * keep + add)
+                if t == 0:
+                    part[q, j] = v
+                else:
+                    part[q, j] += v
+    for q in range(p_count):
+        for j in range(j_count):
+            ll[q, j] += part[q, j]
+
+
+#: :func:`_discrete_block_loop`, compiled on first use
+DISCRETE_BLOCK = kernel(_discrete_block_loop)
+
+
+def discrete_loglik(
+    vx: np.ndarray,
+    vy: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    lapse: np.ndarray,
+    keep: float,
+    w: np.ndarray,
+    table: np.ndarray,
+) -> np.ndarray:
+    """The per-node log-likelihoods ``ll (P, J)`` of a discrete row (:data:`DISCRETE_BLOCK`,
+    ready) for weights ``w (P, n)``: per block of steps the fused components by BLAS, as the
+    reference takes them, then the compiled loop, the particles shared out over the cores when
+    the block is large enough to pay for it (each particle's bits do not depend on the split)."""
+    wt = np.ascontiguousarray(w.T)
+    p_count, j_count = w.shape[0], table.shape[1]
+    ll = np.zeros((p_count, j_count))
+    block = max(16, BLOCK_ELEMENTS // max(1, p_count * j_count))
+    cores = _cores()
+    for c in range(0, vx.shape[0], block):
+        a = vx[c : c + block] @ wt
+        b = vy[c : c + block] @ wt
+        width = hi[c : c + block] - lo[c : c + block]
+        args = (lo[c : c + block], width, lapse[c : c + block], keep, table)
+        parts = min(cores, p_count // 64, (a.shape[0] * p_count * j_count) // SPLIT_WORK)
+        if parts < 2 or not DISCRETE_BLOCK.warm_for():
+            DISCRETE_BLOCK(a, b, *args, ll, 0)
+            continue
+        if not _pool:
+            _pool.append(ThreadPoolExecutor(max_workers=cores - 1, thread_name_prefix="lfdfuse-pf"))
+        cuts = [p_count * i // parts for i in range(parts + 1)]
+        futures = [
+            _pool[0].submit(DISCRETE_BLOCK, a, b, *args, ll[lo_p:hi_p], lo_p)
+            for lo_p, hi_p in zip(cuts[1:-1], cuts[2:], strict=True)
+        ]
+        DISCRETE_BLOCK(a, b, *args, ll[: cuts[1]], 0)  # this thread takes a share too
+        for f in futures:
+            f.result()
+    return ll

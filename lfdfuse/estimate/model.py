@@ -128,7 +128,7 @@ import numpy as np
 from scipy.special import i0e, logsumexp
 
 from lfdfuse.estimate import kernels
-from lfdfuse.estimate.kernels import LOG_MARGINAL, SUM_COS, logsumexp_last, sum_cos_reference
+from lfdfuse.estimate.kernels import DISCRETE_BLOCK, LOG_MARGINAL, SUM_COS, logsumexp_last, sum_cos_reference
 
 
 @dataclass(frozen=True)
@@ -393,7 +393,25 @@ def _cdf_at(x: np.ndarray, table: np.ndarray) -> np.ndarray:
 
 
 def discrete_log_marginal(data: DiscreteRowData, w: np.ndarray, model: FusionModel) -> np.ndarray:
-    """``log p(c₁…c_T | w)`` of the discrete model, ``κ`` integrated out: ``w (P, n)`` → ``(P,)``."""
+    """``log p(c₁…c_T | w)`` of the discrete model, ``κ`` integrated out: ``w (P, n)`` → ``(P,)``;
+    compiled (:func:`~lfdfuse.estimate.kernels.discrete_loglik`) or
+    :func:`discrete_log_marginal_reference`, the same numbers."""
+    if not DISCRETE_BLOCK.ready():
+        return discrete_log_marginal_reference(data, w, model)
+    if isinstance(data.commands, np.ndarray):
+        lapse = model.lapse / np.maximum(1.0, data.commands)
+    else:
+        lapse = np.full(data.steps, model.lapse / max(1, data.commands))
+    table = model.vm_cdf_rows
+    ll = kernels.discrete_loglik(
+        data.vx, data.vy, data.lo, data.hi, lapse, 1.0 - model.lapse, np.asarray(w, dtype=np.float64), table
+    )
+    return np.asarray(logsumexp_last(ll) - math.log(table.shape[1]))
+
+
+def discrete_log_marginal_reference(data: DiscreteRowData, w: np.ndarray, model: FusionModel) -> np.ndarray:
+    """:func:`discrete_log_marginal` in numpy (two BLAS products and the nodes' arrays per block
+    of steps): the reference."""
     wt = np.ascontiguousarray(w.T)
     table = model.vm_cdf_rows
     j = table.shape[1]
