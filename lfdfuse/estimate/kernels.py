@@ -351,6 +351,13 @@ def _discrete_block_loop(
 DISCRETE_BLOCK = kernel(_discrete_block_loop)
 
 
+def _discrete_share(
+    a: np.ndarray, b: np.ndarray, args: tuple[object, ...], ll: np.ndarray, lo: int, hi: int
+) -> None:
+    """:data:`DISCRETE_BLOCK` for the particles ``lo … hi`` (a thread's share)."""
+    DISCRETE_BLOCK(a, b, *args, ll[lo:hi], lo)
+
+
 def discrete_loglik(
     vx: np.ndarray,
     vy: np.ndarray,
@@ -383,8 +390,7 @@ def discrete_loglik(
             _pool.append(ThreadPoolExecutor(max_workers=cores - 1, thread_name_prefix="lfdfuse-pf"))
         cuts = [p_count * i // parts for i in range(parts + 1)]
         futures = [
-            _pool[0].submit(DISCRETE_BLOCK, a, b, *args, ll[lo_p:hi_p], lo_p)
-            for lo_p, hi_p in zip(cuts[1:-1], cuts[2:], strict=True)
+            _pool[0].submit(_discrete_share, a, b, args, ll, cuts[i], cuts[i + 1]) for i in range(1, parts)
         ]
         DISCRETE_BLOCK(a, b, *args, ll[: cuts[1]], 0)  # this thread takes a share too
         for f in futures:
