@@ -264,6 +264,21 @@ def logsumexp_last(a: np.ndarray, *, keepdims: bool = False) -> np.ndarray:
 _TWO_PI = 2.0 * math.pi
 
 
+def _remainder_turn(x: float) -> float:
+    """``np.remainder(x, 2π)`` (the float ``%``, ``fmod`` then the divisor's sign), without the
+    ``fmod`` for ``x`` within a turn of ``[0, 2π)``, where it is exact: ``x`` itself, ``x − 2π``
+    (exact there, Sterbenz) or ``x + 2π`` (the one rounding the ``%`` makes too)."""
+    if x == 0.0:
+        return 0.0  # −0.0 too: the remainder takes the divisor's sign
+    if 0.0 < x < _TWO_PI:
+        return x
+    if _TWO_PI <= x < 2.0 * _TWO_PI:
+        return x - _TWO_PI
+    if -_TWO_PI <= x < 0.0:
+        return x + _TWO_PI
+    return x % _TWO_PI
+
+
 def _discrete_block_loop(
     a: np.ndarray,
     b: np.ndarray,
@@ -307,9 +322,10 @@ def _discrete_block_loop(
             p = first + q
             at = a[t, p]
             bt = b[t, p]
-            zero = math.hypot(at, bt) <= 1e-12
+            # |(a, b)| ≥ max(|a|, |b|): the hypot is needed only where both are tiny
+            zero = abs(at) <= 1e-12 and abs(bt) <= 1e-12 and math.hypot(at, bt) <= 1e-12
             phi = math.atan2(bt, at)
-            low = (lo_t - phi + math.pi) % _TWO_PI - math.pi
+            low = _remainder_turn(lo_t - phi + math.pi) - math.pi
             high = low + w_t
             wrapped = 0.0
             if high > math.pi:
@@ -348,7 +364,7 @@ def _discrete_block_loop(
 
 
 #: :func:`_discrete_block_loop`, compiled on first use
-DISCRETE_BLOCK = kernel(_discrete_block_loop)
+DISCRETE_BLOCK = kernel(_discrete_block_loop, calls=[_remainder_turn])
 
 
 def _discrete_share(

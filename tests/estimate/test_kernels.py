@@ -529,3 +529,14 @@ def test_the_discrete_loop_itself_is_the_reference_in_plain_python() -> None:
     np.testing.assert_allclose(got, want, rtol=1e-12, atol=0.0)
     if _libm_elementwise():
         assert got.tobytes() == want.tobytes()
+
+
+def test_the_turns_remainder_is_numpys() -> None:
+    """The shift of a decision's interval by the fused heading: numpy's remainder by 2π to the
+    bit, at the edges of a turn, signed zeros, tiny negatives (that round up to 2π) and beyond."""
+    y = 2.0 * math.pi
+    rng = np.random.default_rng(12)
+    edges = [0.0, -0.0, y, -y, 2 * y, -2 * y, np.nextafter(y, 0.0), np.nextafter(2 * y, 0.0), -1e-300, -1e-17]
+    x = np.concatenate([rng.uniform(-3 * y, 3 * y, 20000), edges, [1e-300, 3 * y, 1e6]])
+    got = np.array([kernels._remainder_turn(float(v)) for v in x])
+    assert got.tobytes() == np.remainder(x, y).tobytes()
