@@ -540,3 +540,50 @@ def test_the_turns_remainder_is_numpys() -> None:
     x = np.concatenate([rng.uniform(-3 * y, 3 * y, 20000), edges, [1e-300, 3 * y, 1e6]])
     got = np.array([kernels._remainder_turn(float(v)) for v in x])
     assert got.tobytes() == np.remainder(x, y).tobytes()
+
+
+@needs_discrete
+def test_the_sampler_with_the_compiled_discrete_likelihood_gives_the_reference_draws(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A whole pass over keyboard rows (one command set, pooled sets of several sizes, and a row
+    mixing a scripted demo's steps with a person's decisions) with the compiled discrete
+    likelihood and with its numpy reference: the same draws, to the bit where numpy's elementwise
+    functions are libm's (a pass is chaotic: one ulp there is another posterior)."""
+    from lfdfuse.estimate import smc
+    from lfdfuse.estimate.smc import SMCParams, TemperedSMC
+
+    rng = np.random.default_rng(6)
+    rows: list[model.Row] = [
+        _decisions(rng, 120, 4, True, "one", 0.05),
+        _decisions(rng, 60, 6, False, "pooled", 0.0),
+    ]
+    vectors = rng.normal(0.0, 0.6, (50, 3, 2))
+    rows.append(
+        model.MixedRowData(
+            model.row_data(vectors, rng.normal(0.0, 1.0, (50, 2))), _decisions(rng, 40, 3, True, "one", 0.0)
+        )
+    )
+
+    def run() -> smc.SMCResult:
+        return TemperedSMC(
+            rows,
+            trials=2,
+            model=model.FusionModel(),
+            params=SMCParams(particles=96),
+            rng=np.random.default_rng(2),
+        ).run()
+
+    class NotCompiled:
+        def ready(self) -> bool:
+            return False
+
+    fast = run()
+    monkeypatch.setattr(model, "DISCRETE_BLOCK", NotCompiled())
+    with np.errstate(divide="ignore"):
+        ref = run()
+    assert fast.iterations == ref.iterations
+    np.testing.assert_allclose(np.exp(fast.logw), np.exp(ref.logw), rtol=0.0, atol=1e-9)
+    if _libm_elementwise():
+        assert fast.logw.tobytes() == ref.logw.tobytes()
+        assert fast.log_evidence.tobytes() == ref.log_evidence.tobytes()
