@@ -360,13 +360,8 @@ def bench_likelihood(rows: list[Row], folder: Path) -> None:
 def bench_discrete_likelihood(rows: list[Row], rng: np.random.Generator) -> None:
     """The discrete command model's likelihood (a keyboard demo's decisions): compiled beside
     its numpy reference, which it must equal to the bit."""
-    from lfdfuse.estimate.kernels import DISCRETE_BLOCK
-    from lfdfuse.estimate.model import (
-        DiscreteRowData,
-        FusionModel,
-        discrete_log_marginal,
-        discrete_log_marginal_reference,
-    )
+    from lfdfuse.estimate.discrete_kernels import DISCRETE_BLOCK, discrete_log_marginal_reference
+    from lfdfuse.estimate.model import DiscreteRowData, FusionModel, discrete_log_marginal
 
     t, n, p = 300, 6, 384 * 4  # a row of a few minutes' keypresses, a discrete pass's particles
     lo = rng.uniform(-math.pi, math.pi, t)

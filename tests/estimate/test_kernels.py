@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse.estimate import kernels, model, smc_kernels
+from lfdfuse.estimate import discrete_kernels, kernels, model, smc_kernels
 from lfdfuse.estimate.model import RowData, sum_cos, sum_cos_reference
 
 needs_numba = pytest.mark.skipif(not kernels.SUM_COS.ready(), reason="numba kernels unavailable here")
@@ -424,7 +424,7 @@ def _decisions(
 
 
 needs_discrete = pytest.mark.skipif(
-    not kernels.DISCRETE_BLOCK.ready(), reason="numba kernels unavailable here"
+    not discrete_kernels.DISCRETE_BLOCK.ready(), reason="numba kernels unavailable here"
 )
 
 
@@ -502,7 +502,7 @@ def test_numpy_mode_runs_the_discrete_reference(monkeypatch: pytest.MonkeyPatch)
     data = _decisions(rng, 60, 4, True, "pooled", 0.1)
     w = rng.dirichlet(np.full(4, 0.5), 30)
     m = model.FusionModel()
-    assert not kernels.DISCRETE_BLOCK.ready()
+    assert not discrete_kernels.DISCRETE_BLOCK.ready()
     got = model.row_loglik(data, w, m)
     assert got.tobytes() == model.discrete_log_marginal_reference(data, w, m).tobytes()
     assert np.all(np.isfinite(got)) and np.all(got < 0.0)
@@ -521,7 +521,7 @@ def test_the_discrete_loop_itself_is_the_reference_in_plain_python() -> None:
     lapse = np.full(data.steps, m.lapse / data.commands)
     ll = np.zeros((6, m.vm_cdf_rows.shape[1]))
     for first, stop in ((0, 2), (2, 6)):
-        kernels._discrete_block_loop(
+        discrete_kernels._discrete_block_loop(
             a, b, data.lo, data.hi - data.lo, lapse, 1.0 - m.lapse, m.vm_cdf_rows, ll[first:stop], first
         )
     got = kernels.logsumexp_last(ll) - math.log(ll.shape[1])
@@ -538,7 +538,7 @@ def test_the_turns_remainder_is_numpys() -> None:
     rng = np.random.default_rng(12)
     edges = [0.0, -0.0, y, -y, 2 * y, -2 * y, np.nextafter(y, 0.0), np.nextafter(2 * y, 0.0), -1e-300, -1e-17]
     x = np.concatenate([rng.uniform(-3 * y, 3 * y, 20000), edges, [1e-300, 3 * y, 1e6]])
-    got = np.array([kernels._remainder_turn(float(v)) for v in x])
+    got = np.array([discrete_kernels._remainder_turn(float(v)) for v in x])
     assert got.tobytes() == np.remainder(x, y).tobytes()
 
 
