@@ -5,7 +5,8 @@ it stands for stays the reference (:func:`sum_cos_reference`,
 :func:`~lfdfuse.estimate.model.log_marginal`), and the tests hold the two to 1e-12. A long row's
 particles are shared out over the machine's cores (:func:`continuous_loglik`: threads, the loops
 release the GIL), each particle computed alone, so the split changes no bit. The sampler's other
-steps: :mod:`lfdfuse.estimate.smc_kernels`.
+steps: :mod:`lfdfuse.estimate.smc_kernels`; the discrete command model's likelihood:
+:mod:`lfdfuse.estimate.discrete_kernels`.
 """
 
 from __future__ import annotations

@@ -35,7 +35,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lfdfuse.estimate.model import CommandBins, FusionModel, _cdf_at
+from lfdfuse.estimate.discrete_kernels import cdf_at
+from lfdfuse.estimate.model import CommandBins, FusionModel
 
 #: added to every key's count of training presses (a key never pressed keeps a chance)
 PSEUDO_COUNT = 0.5
@@ -70,7 +71,7 @@ def bin_probabilities(bins: CommandBins, heading: np.ndarray, model: FusionModel
     hi = lo + width
     wrap = hi > math.pi
     table = model.vm_cdf_rows
-    p = _cdf_at(np.where(wrap, hi - 2.0 * math.pi, hi), table) + wrap[..., None] - _cdf_at(lo, table)
+    p = cdf_at(np.where(wrap, hi - 2.0 * math.pi, hi), table) + wrap[..., None] - cdf_at(lo, table)
     return np.asarray(np.clip(p, 0.0, 1.0).transpose(0, 2, 1))
 
 

@@ -128,6 +128,12 @@ import numpy as np
 from scipy.special import i0e, logsumexp
 
 from lfdfuse.estimate import kernels
+from lfdfuse.estimate.discrete_kernels import (
+    CDF_GRID,
+    DISCRETE_BLOCK,
+    discrete_log_marginal_reference,
+    discrete_loglik,
+)
 from lfdfuse.estimate.kernels import LOG_MARGINAL, SUM_COS, logsumexp_last, sum_cos_reference
 
 
@@ -183,10 +189,6 @@ class FusionModel:
     def vm_cdf_rows(self) -> np.ndarray:
         """:attr:`vm_cdf` transposed ``(G + 1, J)``, contiguous (the likelihood's lookup table)."""
         return np.ascontiguousarray(self.vm_cdf.T)
-
-
-#: grid cells of the tabulated von Mises CDF over a full turn (0.18°: fine for σ ≥ 2°)
-CDF_GRID = 2048
 
 
 @dataclass(frozen=True)
@@ -382,46 +384,20 @@ def sum_cos(data: RowData, w: np.ndarray, *, of: int | None = None) -> np.ndarra
     return sum_cos_reference(data, w)
 
 
-def _cdf_at(x: np.ndarray, table: np.ndarray) -> np.ndarray:
-    """The tabulated CDFs ``table (G + 1, J)`` at ``x (…)`` in ``[−π, π]`` → ``(…, J)`` (linear;
-    the nodes last, so each lookup gathers one contiguous row)."""
-    pos = (np.clip(x, -math.pi, math.pi) + math.pi) * (CDF_GRID / (2.0 * math.pi))
-    i = np.minimum(pos.astype(np.int64), CDF_GRID - 1)
-    f = (pos - i)[..., None]
-    lo = table[i]
-    return np.asarray(lo + f * (table[i + 1] - lo))
-
-
 def discrete_log_marginal(data: DiscreteRowData, w: np.ndarray, model: FusionModel) -> np.ndarray:
-    """``log p(c₁…c_T | w)`` of the discrete model, ``κ`` integrated out: ``w (P, n)`` → ``(P,)``."""
-    wt = np.ascontiguousarray(w.T)
-    table = model.vm_cdf_rows
-    j = table.shape[1]
-    ll = np.zeros((w.shape[0], j))
-    block = max(16, kernels.BLOCK_ELEMENTS // max(1, w.shape[0] * j))
-    lapse: float | np.ndarray
-    if isinstance(data.commands, np.ndarray):  # pooled demos' command sets of several sizes
+    """``log p(c₁…c_T | w)`` of the discrete model, ``κ`` integrated out: ``w (P, n)`` → ``(P,)``;
+    compiled (:mod:`~lfdfuse.estimate.discrete_kernels`) or its numpy reference, the same numbers."""
+    if not DISCRETE_BLOCK.ready():
+        return discrete_log_marginal_reference(data, w, model)
+    if isinstance(data.commands, np.ndarray):
         lapse = model.lapse / np.maximum(1.0, data.commands)
     else:
-        lapse = model.lapse / max(1, data.commands)
-    for c in range(0, data.steps, block):
-        a = data.vx[c : c + block] @ wt
-        b = data.vy[c : c + block] @ wt
-        phi = np.arctan2(b, a)
-        width = (data.hi[c : c + block] - data.lo[c : c + block])[:, None]
-        lo = np.remainder(data.lo[c : c + block, None] - phi + math.pi, 2.0 * math.pi) - math.pi
-        hi = lo + width
-        wrap = hi > math.pi
-        p = _cdf_at(np.where(wrap, hi - 2.0 * math.pi, hi), table) + wrap[..., None] - _cdf_at(lo, table)
-        zero = np.hypot(a, b) <= 1e-12
-        p = np.where(zero[..., None], (width / (2.0 * math.pi))[..., None], p)
-        # (steps, particles, nodes) in place: the largest temporaries of a discrete row
-        np.clip(p, 0.0, 1.0, out=p)
-        p *= 1.0 - model.lapse
-        p += lapse[c : c + block, None, None] if isinstance(lapse, np.ndarray) else lapse
-        np.log(p, out=p)
-        ll += p.sum(axis=0)
-    return np.asarray(logsumexp_last(ll) - math.log(j))
+        lapse = np.full(data.steps, model.lapse / max(1, data.commands))
+    table = model.vm_cdf_rows
+    ll = discrete_loglik(
+        data.vx, data.vy, data.lo, data.hi, lapse, 1.0 - model.lapse, np.asarray(w, dtype=np.float64), table
+    )
+    return np.asarray(logsumexp_last(ll) - math.log(table.shape[1]))
 
 
 def row_loglik(data: Row, w: np.ndarray, model: FusionModel, *, of: int | None = None) -> np.ndarray:

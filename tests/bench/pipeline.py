@@ -354,6 +354,44 @@ def bench_likelihood(rows: list[Row], folder: Path) -> None:
             rate(reference),
         )
     )
+    bench_discrete_likelihood(rows, rng)
+
+
+def bench_discrete_likelihood(rows: list[Row], rng: np.random.Generator) -> None:
+    """The discrete command model's likelihood (a keyboard demo's decisions): compiled beside
+    its numpy reference, which it must equal to the bit."""
+    from lfdfuse.estimate.discrete_kernels import DISCRETE_BLOCK, discrete_log_marginal_reference
+    from lfdfuse.estimate.model import DiscreteRowData, FusionModel, discrete_log_marginal
+
+    t, n, p = 300, 6, 384 * 4  # a row of a few minutes' keypresses, a discrete pass's particles
+    lo = rng.uniform(-math.pi, math.pi, t)
+    data = DiscreteRowData(
+        rng.normal(0, 0.6, (t, n)), rng.normal(0, 0.6, (t, n)), lo, lo + rng.uniform(0.2, 2.0, t), 5
+    )
+    w = rng.dirichlet(np.full(n, 0.5), p)
+    m = FusionModel()
+    DISCRETE_BLOCK.ready()  # compile (or load the cache) outside the timing
+    got, want = discrete_log_marginal(data, w, m), discrete_log_marginal_reference(data, w, m)
+    assert np.allclose(got, want, rtol=1e-12, atol=0.0), "compiled and reference likelihoods disagree"
+    same = got.tobytes() == want.tobytes()
+
+    def fast() -> int:
+        discrete_log_marginal(data, w, m)
+        return t * p
+
+    def reference() -> int:
+        discrete_log_marginal_reference(data, w, m)
+        return t * p
+
+    rows.append(
+        Row(
+            f"pf likelihood (discrete), T=300, n=6, P=1,536{'' if same else ' (bits differ!)'}",
+            rate(fast),
+            "particle-steps/s",
+            "numpy reference",
+            rate(reference),
+        )
+    )
 
 
 def bench_estimate(rows: list[Row], folder: Path, quick: bool = False) -> None:

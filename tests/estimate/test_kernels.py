@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse.estimate import kernels, model, smc_kernels
+from lfdfuse.estimate import discrete_kernels, kernels, model, smc_kernels
 from lfdfuse.estimate.model import RowData, sum_cos, sum_cos_reference
 
 needs_numba = pytest.mark.skipif(not kernels.SUM_COS.ready(), reason="numba kernels unavailable here")
@@ -384,3 +384,206 @@ def test_compiled_tempering_step_agrees_with_the_reference(
     assert np.all((got >= 0.0) & (got <= room))
     if platform.machine() in ("x86_64", "AMD64"):
         assert got.tobytes() == want.tobytes()
+
+
+def _libm_elementwise() -> bool:
+    """Whether numpy's log, arctan2 and hypot of float64 give libm's bits here (they do unless a
+    build takes a SIMD path of its own, as numpy's AVX-512 log does): the discrete likelihood's
+    loop calls libm, so it gives the reference's bits where they are the same functions."""
+    rng = np.random.default_rng(0)
+    x = rng.uniform(1e-6, 1.0, 4096)
+    a, b = rng.normal(0.0, 1.0, (2, 4096))
+    logs = np.array([math.log(v) for v in x])
+    angles = np.array([math.atan2(v, u) for u, v in zip(a, b, strict=True)])
+    norms = np.array([math.hypot(u, v) for u, v in zip(a, b, strict=True)])
+    return bool(
+        np.array_equal(np.log(x), logs)
+        and np.array_equal(np.arctan2(b, a), angles)
+        and np.array_equal(np.hypot(a, b), norms)
+    )
+
+
+def _decisions(
+    rng: np.random.Generator, steps: int, n: int, zeros: bool, sizes: str, wide: float
+) -> model.DiscreteRowData:
+    """A discrete row: the behaviours' vectors (some zero with ``zeros``), each decision's
+    interval anywhere on the circle (wrapping past ±π where it does; a ``wide`` share the full
+    turn, −π to π), out of one command set (``sizes="one"``) or pooled sets of several sizes."""
+    vx, vy = rng.normal(0.0, 0.6, (2, steps, n))
+    if zeros:
+        gone = rng.uniform(size=(steps, n)) < 0.3
+        vx[gone] = vy[gone] = 0.0
+    lo = rng.uniform(-math.pi, math.pi, steps)
+    hi = lo + rng.uniform(1e-3, 2.0 * math.pi - 1e-3, steps)
+    full = rng.uniform(size=steps) < wide
+    lo[full], hi[full] = -math.pi, math.pi
+    commands: int | np.ndarray = int(rng.integers(1, 9))
+    if sizes == "pooled":
+        commands = rng.choice([3.0, 5.0, 7.0], steps)
+    return model.DiscreteRowData(vx, vy, lo, hi, commands)
+
+
+needs_discrete = pytest.mark.skipif(
+    not discrete_kernels.DISCRETE_BLOCK.ready(), reason="numba kernels unavailable here"
+)
+
+
+@needs_discrete
+@settings(max_examples=80, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(1, 700),
+    st.integers(1, 9),
+    st.sampled_from([1, 2, 3, 17, 64, 200, 384]),
+    st.booleans(),
+    st.sampled_from(["one", "pooled"]),
+    st.sampled_from([0.0, 0.02, 0.2, 1.0]),
+    st.sampled_from([0.0, 0.1, 1.0]),
+    st.sampled_from([4, 16, 33]),
+)
+def test_compiled_discrete_likelihood_is_the_reference(
+    seed: int,
+    steps: int,
+    n: int,
+    particles: int,
+    zeros: bool,
+    sizes: str,
+    lapse: float,
+    wide: float,
+    nodes: int,
+) -> None:
+    """``log p(c₁…c_T | w)`` of the discrete command model, compiled and in numpy, over rows of
+    many blocks (the block shrinks with particles × nodes), zero vectors and zero weights, every
+    lapse (none: log 0 is −∞ in both): to the bit where numpy's elementwise functions are libm's,
+    and to 1e-12 everywhere."""
+    rng = np.random.default_rng(seed)
+    data = _decisions(rng, steps, n, zeros, sizes, wide)
+    w = rng.dirichlet(np.full(n, 0.5), particles)
+    if zeros:
+        w[: particles // 3] = 0.0  # every fused vector zero: the interval's width over 2π
+    m = model.FusionModel(lapse=lapse, discrete_kappa_points=nodes)
+    got = model.discrete_log_marginal(data, w, m)
+    with np.errstate(divide="ignore"):
+        want = model.discrete_log_marginal_reference(data, w, m)
+    assert got.shape == want.shape == (particles,)
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=0.0)
+    if _libm_elementwise():
+        assert got.tobytes() == want.tobytes()
+
+
+@needs_discrete
+@settings(max_examples=25, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1), st.integers(1, 300), st.integers(1, 8), st.integers(1, 700), st.integers(2, 5)
+)
+def test_a_discrete_rows_likelihood_shared_over_threads_is_the_same_bits(
+    seed: int, steps: int, n: int, particles: int, cores: int
+) -> None:
+    """The particles of a large block are shared out over the cores: every particle's bits are
+    the ones a single thread gives it."""
+    rng = np.random.default_rng(seed)
+    data = _decisions(rng, steps, n, True, "pooled", 0.1)
+    w = rng.dirichlet(np.full(n, 0.5), particles)
+    m = model.FusionModel()
+    one = model.discrete_log_marginal(data, w, m)  # compiles: the split needs the loop warm
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(kernels, "SPLIT_WORK", 1)
+        patch.setattr(kernels, "_cores", lambda: cores)
+        shared = model.discrete_log_marginal(data, w, m)
+    assert shared.tobytes() == one.tobytes()
+    np.testing.assert_allclose(
+        shared, model.discrete_log_marginal_reference(data, w, m), rtol=1e-12, atol=0.0
+    )
+
+
+def test_numpy_mode_runs_the_discrete_reference(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("LFDFUSE_KERNELS", "numpy")
+    rng = np.random.default_rng(8)
+    data = _decisions(rng, 60, 4, True, "pooled", 0.1)
+    w = rng.dirichlet(np.full(4, 0.5), 30)
+    m = model.FusionModel()
+    assert not discrete_kernels.DISCRETE_BLOCK.ready()
+    got = model.row_loglik(data, w, m)
+    assert got.tobytes() == model.discrete_log_marginal_reference(data, w, m).tobytes()
+    assert np.all(np.isfinite(got)) and np.all(got < 0.0)
+
+
+def test_the_discrete_loop_itself_is_the_reference_in_plain_python() -> None:
+    """The loop numba compiles, run by the interpreter (Python's math is libm, its float ``%``
+    numpy's remainder): the reference's numbers, a particle share at a time."""
+    rng = np.random.default_rng(9)
+    data = _decisions(rng, 25, 3, True, "one", 0.2)
+    w = rng.dirichlet(np.full(3, 0.5), 6)
+    w[0] = 0.0
+    m = model.FusionModel()
+    assert isinstance(data.commands, int)
+    a, b = data.vx @ w.T, data.vy @ w.T
+    lapse = np.full(data.steps, m.lapse / data.commands)
+    ll = np.zeros((6, m.vm_cdf_rows.shape[1]))
+    for first, stop in ((0, 2), (2, 6)):
+        discrete_kernels._discrete_block_loop(
+            a, b, data.lo, data.hi - data.lo, lapse, 1.0 - m.lapse, m.vm_cdf_rows, ll[first:stop], first
+        )
+    got = kernels.logsumexp_last(ll) - math.log(ll.shape[1])
+    want = model.discrete_log_marginal_reference(data, w, m)
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=0.0)
+    if _libm_elementwise():
+        assert got.tobytes() == want.tobytes()
+
+
+def test_the_turns_remainder_is_numpys() -> None:
+    """The shift of a decision's interval by the fused heading: numpy's remainder by 2π to the
+    bit, at the edges of a turn, signed zeros, tiny negatives (that round up to 2π) and beyond."""
+    y = 2.0 * math.pi
+    rng = np.random.default_rng(12)
+    edges = [0.0, -0.0, y, -y, 2 * y, -2 * y, np.nextafter(y, 0.0), np.nextafter(2 * y, 0.0), -1e-300, -1e-17]
+    x = np.concatenate([rng.uniform(-3 * y, 3 * y, 20000), edges, [1e-300, 3 * y, 1e6]])
+    got = np.array([discrete_kernels._remainder_turn(float(v)) for v in x])
+    assert got.tobytes() == np.remainder(x, y).tobytes()
+
+
+@needs_discrete
+def test_the_sampler_with_the_compiled_discrete_likelihood_gives_the_reference_draws(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A whole pass over keyboard rows (one command set, pooled sets of several sizes, and a row
+    mixing a scripted demo's steps with a person's decisions) with the compiled discrete
+    likelihood and with its numpy reference: the same draws, to the bit where numpy's elementwise
+    functions are libm's (a pass is chaotic: one ulp there is another posterior)."""
+    from lfdfuse.estimate import smc
+    from lfdfuse.estimate.smc import SMCParams, TemperedSMC
+
+    rng = np.random.default_rng(6)
+    rows: list[model.Row] = [
+        _decisions(rng, 120, 4, True, "one", 0.05),
+        _decisions(rng, 60, 6, False, "pooled", 0.0),
+    ]
+    vectors = rng.normal(0.0, 0.6, (50, 3, 2))
+    rows.append(
+        model.MixedRowData(
+            model.row_data(vectors, rng.normal(0.0, 1.0, (50, 2))), _decisions(rng, 40, 3, True, "one", 0.0)
+        )
+    )
+
+    def run() -> smc.SMCResult:
+        return TemperedSMC(
+            rows,
+            trials=2,
+            model=model.FusionModel(),
+            params=SMCParams(particles=96),
+            rng=np.random.default_rng(2),
+        ).run()
+
+    class NotCompiled:
+        def ready(self) -> bool:
+            return False
+
+    fast = run()
+    monkeypatch.setattr(model, "DISCRETE_BLOCK", NotCompiled())
+    with np.errstate(divide="ignore"):
+        ref = run()
+    assert fast.iterations == ref.iterations
+    np.testing.assert_allclose(np.exp(fast.logw), np.exp(ref.logw), rtol=0.0, atol=1e-9)
+    if _libm_elementwise():
+        assert fast.logw.tobytes() == ref.logw.tobytes()
+        assert fast.log_evidence.tobytes() == ref.log_evidence.tobytes()
