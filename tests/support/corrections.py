@@ -1,8 +1,10 @@
 """A scripted person who corrects a learned table where its robot left the teacher's path.
 
 Given a failed run of the table (its log) and the teacher's path, :func:`correction_plan` finds
-where the robot left the path (:func:`lfdfuse.execute.check.follow`: the last point of the
-teacher's path it met in order). :func:`record_correction` then runs ``teleop --table`` from the
+where the robot left the path: the last point of the teacher's path it met in order (as
+:func:`lfdfuse.execute.check.follow` counts them) before it strayed :data:`LEAVE_M` from the
+stretch of the path since (into a dead end the teacher passed by, round the wrong way): a point it
+meets only after coming back is not followed. :func:`record_correction` then runs ``teleop --table`` from the
 same start and seed — tick for tick the failed run until the person takes over — and a
 :class:`PathPerson` takes over a little before that point, drives the teacher's path (pure
 pursuit, as a Twist client would) through the place the robot missed and some metres past it,
@@ -34,6 +36,9 @@ LEAD_S = 2.0
 #: and drives the teacher's path this far (m) past the first point the robot missed
 PAST_M = 6.0
 RADIUS_M = 1.0  # a path point is met within this (as the check's)
+#: the robot has left the path where it is this far (m) from the stretch between the last point it
+#: met and the next one
+LEAVE_M = 2.5
 LOOKAHEAD_M = 0.8
 SPEED_MPS = 0.4
 
@@ -53,7 +58,10 @@ def correction_plan(teacher_xy: np.ndarray, robot_xy: np.ndarray, dt_s: float) -
     last_i, last_t = pts[0], 0
     missed = None
     for i in pts:
-        d = np.hypot(*(robot_xy[t:] - teacher_xy[i]).T)
+        stretch = teacher_xy[last_i : i + 1]
+        away = np.min(np.hypot(*(robot_xy[t:, None, :] - stretch[None, :, :]).transpose(2, 0, 1)), axis=1)
+        left = np.nonzero(away > LEAVE_M)[0]
+        d = np.hypot(*(robot_xy[t : t + (int(left[0]) if len(left) else len(away))] - teacher_xy[i]).T)
         hit = np.nonzero(d < RADIUS_M)[0]
         if not len(hit):
             missed = i

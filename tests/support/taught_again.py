@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from lfdfuse import learn
+from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.execute.starts import perturbed_starts
 from lfdfuse.log.reader import read_run
@@ -178,7 +179,20 @@ def teach_again_screened(
         return TaughtAgain(
             s.seed, True, s.before, failing, table_before=table, times={**s.times, **clock.times}
         )
-    res = learn.learn([s.demo_segmented, corr], options=learn.LearnOptions(estimate, subgoals=True))
+    try:
+        res = learn.learn([s.demo_segmented, corr], options=learn.LearnOptions(estimate, subgoals=True))
+    except ConfigError as e:  # the estimate refuses the correction: not fixed, no runs after
+        clock.lap("estimate demo+correction")
+        return TaughtAgain(
+            s.seed,
+            True,
+            s.before,
+            failing,
+            True,
+            verdicts=(f"refused: {e}",),
+            table_before=table,
+            times={**s.times, **clock.times},
+        )
     clock.lap("estimate demo+correction")
     after = tuple(
         bool(r["completed"])

@@ -1,0 +1,52 @@
+"""The scripted person takes over where the robot left the teacher's path."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tests.support.corrections import LEAVE_M, correction_plan
+
+DT_S = 0.1
+STEP_M = 0.04  # 0.4 m/s
+DEAD_END_M = 6.0
+
+
+def _line(a: tuple[float, float], b: tuple[float, float]) -> np.ndarray:
+    n = max(int(round(np.hypot(b[0] - a[0], b[1] - a[1]) / STEP_M)), 1)
+    return np.linspace(a, b, n, endpoint=False)
+
+
+TEACHER = np.concatenate([_line((0.0, 0.0), (20.0, 0.0)), [[20.0, 0.0]]])
+
+
+def test_a_robot_that_follows_the_path_within_the_corridor_is_not_corrected() -> None:
+    robot = TEACHER + np.array([0.0, 0.8])  # a metre aside, all the way
+    assert correction_plan(TEACHER, robot, DT_S) is None
+
+
+def test_a_robot_that_stops_short_is_taken_over_where_it_stopped() -> None:
+    robot = np.concatenate([_line((0.0, 0.0), (8.0, 0.0)), np.full((500, 2), [8.0, 0.0])])
+    plan = correction_plan(TEACHER, robot, DT_S)
+    assert plan is not None
+    x_take = robot[round(plan.take_s / DT_S), 0]
+    assert 6.5 < x_take < 8.0
+    assert plan.path_xy[0, 0] < 8.0 < plan.path_xy[-1, 0]
+
+
+def test_a_robot_that_comes_back_from_a_dead_end_is_taken_over_at_its_mouth() -> None:
+    # into a dead end the teacher passed by, round, and back onto the path: the points it meets
+    # after coming back are not followed; the person takes over before the dead end
+    out_and_back = np.concatenate(
+        [
+            _line((0.0, 0.0), (8.0, 0.0)),
+            _line((8.0, 0.0), (8.0, DEAD_END_M)),
+            _line((8.0, DEAD_END_M), (8.0, 0.0)),
+            _line((8.0, 0.0), (20.0, 0.0)),
+        ]
+    )
+    assert DEAD_END_M > LEAVE_M
+    plan = correction_plan(TEACHER, out_and_back, DT_S)
+    assert plan is not None
+    x_take, y_take = out_and_back[round(plan.take_s / DT_S)]
+    assert 6.5 < x_take <= 8.0 and y_take == 0.0
+    assert plan.path_xy[0, 0] < 8.0 and plan.path_xy[-1, 0] > 12.0
