@@ -3,9 +3,11 @@
 Given a failed run of the table (its log) and the teacher's path, :func:`correction_plan` finds
 where the robot left the path: the last point of the teacher's path it met in order (as
 :func:`lfdfuse.execute.check.follow` counts them) before it strayed :data:`LEAVE_M` from the
-stretch of the path since (into a dead end the teacher passed by, round the wrong way): a point it
-meets only after coming back is not followed. :func:`record_correction` then runs ``teleop --table`` from the
-same start and seed — tick for tick the failed run until the person takes over — and a
+stretch of the path since (into a dead end the teacher passed by, round the wrong way) or took
+:data:`STALL_S` to meet the next (dithering): a point it meets only after coming back is not
+followed. Where the teacher reached a goal, the points within :data:`GOAL_M` of it need not be met
+(the robot reaches a goal from where its camera sees it). :func:`record_correction` then runs
+``teleop --table`` from the same start and seed — tick for tick the failed run until the person takes over — and a
 :class:`PathPerson` takes over a little before that point, drives the teacher's path (pure
 pursuit, as a Twist client would) through the place the robot missed and some metres past it,
 and hands back; the network drives on. The log is segmented with the table's behaviours.
@@ -14,6 +16,7 @@ and hands back; the network drives on. The log is segmented with the table's beh
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,6 +42,11 @@ RADIUS_M = 1.0  # a path point is met within this (as the check's)
 #: the robot has left the path where it is this far (m) from the stretch between the last point it
 #: met and the next one
 LEAVE_M = 2.5
+#: or where it took this long (s) from one point of the path to the next (stalled, dithering)
+STALL_S = 20.0
+#: the teacher's path this near (m) where it reached a goal need not be met: a robot reaches the
+#: goal from where its camera sees it, and turns back from there
+GOAL_M = 1.5
 LOOKAHEAD_M = 0.8
 SPEED_MPS = 0.4
 
@@ -51,9 +59,16 @@ class CorrectionPlan:
     path_xy: np.ndarray
 
 
-def correction_plan(teacher_xy: np.ndarray, robot_xy: np.ndarray, dt_s: float) -> CorrectionPlan | None:
-    """Where the person takes over a run that left the teacher's path (None: it never left it)."""
-    pts = path_points(teacher_xy).tolist()
+def correction_plan(
+    teacher_xy: np.ndarray, robot_xy: np.ndarray, dt_s: float, goals_at: Sequence[int] = ()
+) -> CorrectionPlan | None:
+    """Where the person takes over a run that left the teacher's path (None: it never left it);
+    ``goals_at``: the teacher's ticks where it reached a goal."""
+    pts = [
+        i
+        for i in path_points(teacher_xy).tolist()
+        if not any(np.hypot(*(teacher_xy[i] - teacher_xy[g])) < GOAL_M for g in goals_at)
+    ]
     t = 0
     last_i, last_t = pts[0], 0
     missed = None
@@ -61,7 +76,8 @@ def correction_plan(teacher_xy: np.ndarray, robot_xy: np.ndarray, dt_s: float) -
         stretch = teacher_xy[last_i : i + 1]
         away = np.min(np.hypot(*(robot_xy[t:, None, :] - stretch[None, :, :]).transpose(2, 0, 1)), axis=1)
         left = np.nonzero(away > LEAVE_M)[0]
-        d = np.hypot(*(robot_xy[t : t + (int(left[0]) if len(left) else len(away))] - teacher_xy[i]).T)
+        stop = min(int(left[0]) if len(left) else len(away), round(STALL_S / dt_s))
+        d = np.hypot(*(robot_xy[t : t + stop] - teacher_xy[i]).T)
         hit = np.nonzero(d < RADIUS_M)[0]
         if not len(hit):
             missed = i
@@ -125,6 +141,7 @@ def record_correction(
     teacher_xy: np.ndarray,
     max_time_s: float,
     out: Path,
+    goals_at: Sequence[int] = (),
 ) -> Path | None:
     """Correct ``table``'s failed run (its log ``failed_log``, from ``start`` with ``seed``) with a
     :class:`PathPerson`; returns the segmented correction log, or None when the run never left
@@ -133,7 +150,7 @@ def record_correction(
     if run.pose is None:
         return None
     dt_s = float(np.median(np.diff(run.t_ns))) / 1e9
-    plan = correction_plan(teacher_xy, np.asarray(run.pose[:, :2]), dt_s)
+    plan = correction_plan(teacher_xy, np.asarray(run.pose[:, :2]), dt_s, goals_at)
     if plan is None:
         return None
     opts = TeleopOptions(

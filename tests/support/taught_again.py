@@ -164,6 +164,7 @@ def teach_again_screened(
     table, poses = s.table, s.poses
     failing = s.before.index(False)
     teacher_xy = np.asarray(read_run(s.demo_segmented).pose)[:, :2]
+    goals_at = [g.stop - 1 for g in read_segmented(s.demo_segmented).segments if g.target is not None]
     corr = record_correction(
         table,
         world=generate_offroute(s.seed),
@@ -171,6 +172,7 @@ def teach_again_screened(
         seed=failing,  # run_starts drives start k with seed k
         failed_log=folder / f"before-{failing}.mcap",
         teacher_xy=teacher_xy,
+        goals_at=goals_at,
         max_time_s=s.max_time_s,
         out=folder / "correction.mcap",
     )

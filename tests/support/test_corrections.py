@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tests.support.corrections import LEAVE_M, correction_plan
+from tests.support.corrections import LEAVE_M, STALL_S, correction_plan
 
 DT_S = 0.1
 STEP_M = 0.04  # 0.4 m/s
@@ -50,3 +50,37 @@ def test_a_robot_that_comes_back_from_a_dead_end_is_taken_over_at_its_mouth() ->
     x_take, y_take = out_and_back[round(plan.take_s / DT_S)]
     assert 6.5 < x_take <= 8.0 and y_take == 0.0
     assert plan.path_xy[0, 0] < 8.0 and plan.path_xy[-1, 0] > 12.0
+
+
+def test_a_robot_that_dithers_is_taken_over_where_it_stalled() -> None:
+    # a minute to and fro over half a metre, then on along the path: stalled, not following
+    dither = np.concatenate([_line((8.0, 0.0), (8.3, 0.0)), _line((8.3, 0.0), (8.0, 0.0))] * 40)
+    robot = np.concatenate([_line((0.0, 0.0), (8.0, 0.0)), dither, _line((8.0, 0.0), (20.0, 0.0))])
+    assert len(dither) * DT_S > STALL_S
+    plan = correction_plan(TEACHER, robot, DT_S)
+    assert plan is not None
+    assert 6.5 < robot[round(plan.take_s / DT_S), 0] <= 8.3
+
+
+def test_the_teachers_path_at_a_goal_need_not_be_met() -> None:
+    # the teacher drives up a spur to a goal at its end and back; the robot reaches the goal
+    # from a metre and a half short of where the teacher turned
+    teacher = np.concatenate(
+        [
+            _line((0.0, 0.0), (8.0, 0.0)),
+            _line((8.0, 0.0), (8.0, 4.0)),
+            _line((8.0, 4.0), (8.0, 0.0)),
+            TEACHER[200:],
+        ]
+    )
+    goal_at = len(_line((0.0, 0.0), (8.0, 0.0))) + len(_line((8.0, 0.0), (8.0, 4.0)))
+    robot = np.concatenate(
+        [
+            _line((0.0, 0.0), (8.0, 0.0)),
+            _line((8.0, 0.0), (8.0, 2.6)),
+            _line((8.0, 2.6), (8.0, 0.0)),
+            TEACHER[200:],
+        ]
+    )
+    assert correction_plan(teacher, robot, DT_S) is not None  # the spur's end missed
+    assert correction_plan(teacher, robot, DT_S, goals_at=[goal_at]) is None
