@@ -47,6 +47,9 @@ STALL_S = 20.0
 #: the teacher's path this near (m) where it reached a goal need not be met: a robot reaches the
 #: goal from where its camera sees it, and turns back from there
 GOAL_M = 1.5
+#: a robot that strayed and came back drove on along the path when it met the point this far (m)
+#: past the last one it met before straying
+RESUME_M = 2.5
 LOOKAHEAD_M = 0.8
 SPEED_MPS = 0.4
 
@@ -69,21 +72,32 @@ def correction_plan(
         for i in path_points(teacher_xy).tolist()
         if not any(np.hypot(*(teacher_xy[i] - teacher_xy[g])) < GOAL_M for g in goals_at)
     ]
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(teacher_xy, axis=0).T))])
+    stall = round(STALL_S / dt_s)
     t = 0
     last_i, last_t = pts[0], 0
     missed = None
-    for i in pts:
+    k = 0
+    while k < len(pts):
+        i = pts[k]
         stretch = teacher_xy[last_i : i + 1]
         away = np.min(np.hypot(*(robot_xy[t:, None, :] - stretch[None, :, :]).transpose(2, 0, 1)), axis=1)
         left = np.nonzero(away > LEAVE_M)[0]
-        stop = min(int(left[0]) if len(left) else len(away), round(STALL_S / dt_s))
-        d = np.hypot(*(robot_xy[t : t + stop] - teacher_xy[i]).T)
+        out = int(left[0]) if len(left) else len(away)
+        d = np.hypot(*(robot_xy[t : t + min(out, stall)] - teacher_xy[i]).T)
         hit = np.nonzero(d < RADIUS_M)[0]
-        if not len(hit):
+        if len(hit):
+            t += int(hit[0])
+            last_i, last_t = i, t
+            k += 1
+            continue
+        back = _resumed(teacher_xy, robot_xy, pts, k, arc, t + out, stall) if out < stall else None
+        if back is None:
             missed = i
             break
-        t += int(hit[0])
-        last_i, last_t = i, t
+        k, t = back
+        last_i, last_t = pts[k], t
+        k += 1
     if missed is None:
         return None
     take = max(last_t - round(LEAD_S / dt_s), 1)
@@ -94,6 +108,37 @@ def correction_plan(
     s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(teacher_xy, axis=0).T))])
     end = int(np.searchsorted(s, s[missed] + PAST_M))
     return CorrectionPlan(take * dt_s, teacher_xy[start : min(end, len(teacher_xy) - 1) + 1])
+
+
+def _resumed(
+    teacher_xy: np.ndarray,
+    robot_xy: np.ndarray,
+    pts: Sequence[int],
+    k: int,
+    arc: np.ndarray,
+    t: int,
+    stall: int,
+) -> tuple[int, int] | None:
+    """A robot that strayed at tick ``t`` from the path before point ``pts[k]``: where it came back
+    to the last point it met and drove on along the path from there (``(point index, tick)`` of
+    the first point :data:`RESUME_M` further on, met within ``stall`` ticks of coming back without
+    straying again), or None (it went elsewhere)."""
+    last = teacher_xy[pts[k - 1]] if k else teacher_xy[pts[0]]
+    near = np.nonzero(np.hypot(*(robot_xy[t:] - last).T) < RADIUS_M)[0]
+    if not len(near):
+        return None
+    t += int(near[0])
+    ahead = [j for j in range(k, len(pts)) if arc[pts[j]] >= arc[pts[max(k - 1, 0)]] + RESUME_M]
+    if not ahead:
+        return None
+    j = ahead[0]
+    stretch = teacher_xy[pts[max(k - 1, 0)] : pts[j] + 1]
+    window = robot_xy[t : t + stall]
+    away = np.min(np.hypot(*(window[:, None, :] - stretch[None, :, :]).transpose(2, 0, 1)), axis=1)
+    left = np.nonzero(away > LEAVE_M)[0]
+    window = window[: int(left[0]) if len(left) else len(window)]
+    hit = np.nonzero(np.hypot(*(window - teacher_xy[pts[j]]).T) < RADIUS_M)[0]
+    return (j, t + int(hit[0])) if len(hit) else None
 
 
 class PathPerson:

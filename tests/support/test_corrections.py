@@ -33,23 +33,38 @@ def test_a_robot_that_stops_short_is_taken_over_where_it_stopped() -> None:
     assert plan.path_xy[0, 0] < 8.0 < plan.path_xy[-1, 0]
 
 
-def test_a_robot_that_comes_back_from_a_dead_end_is_taken_over_at_its_mouth() -> None:
-    # into a dead end the teacher passed by, round, and back onto the path: the points it meets
-    # after coming back are not followed; the person takes over before the dead end
-    out_and_back = np.concatenate(
+def test_a_robot_that_comes_back_from_a_dead_end_the_wrong_way_is_taken_over_at_its_mouth() -> None:
+    # into a dead end the teacher passed by, round, back the way it came and, a lap later, along
+    # the path: the points it meets after the lap are not followed; the person takes over
+    # before the dead end
+    lap = np.concatenate(
+        [
+            _line((0.0, 0.0), (8.0, 0.0)),
+            _line((8.0, 0.0), (8.0, DEAD_END_M)),
+            _line((8.0, DEAD_END_M), (8.0, 0.0)),
+            _line((8.0, 0.0), (0.0, 0.0)),
+            _line((0.0, 0.0), (20.0, 0.0)),
+        ]
+    )
+    assert DEAD_END_M > LEAVE_M
+    plan = correction_plan(TEACHER, lap, DT_S)
+    assert plan is not None
+    x_take, y_take = lap[round(plan.take_s / DT_S)]
+    assert 6.5 < x_take <= 8.0 and y_take == 0.0
+    assert plan.path_xy[0, 0] < 8.0 and plan.path_xy[-1, 0] > 12.0
+
+
+def test_a_robot_that_turns_round_in_a_dead_end_and_drives_on_is_not_corrected() -> None:
+    out_and_on = np.concatenate(
         [
             _line((0.0, 0.0), (8.0, 0.0)),
             _line((8.0, 0.0), (8.0, DEAD_END_M)),
             _line((8.0, DEAD_END_M), (8.0, 0.0)),
             _line((8.0, 0.0), (20.0, 0.0)),
+            [[20.0, 0.0]],
         ]
     )
-    assert DEAD_END_M > LEAVE_M
-    plan = correction_plan(TEACHER, out_and_back, DT_S)
-    assert plan is not None
-    x_take, y_take = out_and_back[round(plan.take_s / DT_S)]
-    assert 6.5 < x_take <= 8.0 and y_take == 0.0
-    assert plan.path_xy[0, 0] < 8.0 and plan.path_xy[-1, 0] > 12.0
+    assert correction_plan(TEACHER, out_and_on, DT_S) is None
 
 
 def test_a_robot_that_dithers_is_taken_over_where_it_stalled() -> None:
