@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +51,7 @@ GOAL_M = 1.5
 #: past the last one it met before straying
 RESUME_M = 2.5
 LOOKAHEAD_M = 0.8
+STOP_M = 0.3  # the teacher's place at a goal is driven to within this
 SPEED_MPS = 0.4
 
 
@@ -60,6 +61,8 @@ class CorrectionPlan:
 
     take_s: float
     path_xy: np.ndarray
+    #: indices into ``path_xy`` where the teacher reached a goal: driven to, not cut short
+    stops: tuple[int, ...] = ()
 
 
 def correction_plan(
@@ -105,9 +108,9 @@ def correction_plan(
     here = robot_xy[take]
     lo = max(last_i - 200, 0)
     start = lo + int(np.argmin(np.hypot(*(teacher_xy[lo : last_i + 1] - here).T)))
-    s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(teacher_xy, axis=0).T))])
-    end = int(np.searchsorted(s, s[missed] + PAST_M))
-    return CorrectionPlan(take * dt_s, teacher_xy[start : min(end, len(teacher_xy) - 1) + 1])
+    end = min(int(np.searchsorted(arc, arc[missed] + PAST_M)), len(teacher_xy) - 1)
+    stops = tuple(g - start for g in goals_at if start <= g <= end)
+    return CorrectionPlan(take * dt_s, teacher_xy[start : end + 1], stops)
 
 
 def _resumed(
@@ -165,8 +168,12 @@ class PathPerson:
         if near >= len(path) - 3:
             self.done = True
             return [Input("handback", "path driven", SOURCE)]
+        stop = next((g for g in self.plan.stops if g >= near), None)
+        if stop is not None and d[stop] < STOP_M:
+            self.plan = replace(self.plan, stops=tuple(g for g in self.plan.stops if g != stop))
+            stop = None
         ahead = near
-        while ahead < len(path) - 1 and d[ahead] < LOOKAHEAD_M:
+        while ahead < len(path) - 1 and d[ahead] < LOOKAHEAD_M and ahead != stop:
             ahead += 1
         gx, gy = path[ahead]
         err = math.atan2(gy - pose.y, gx - pose.x) - pose.theta
