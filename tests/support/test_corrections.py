@@ -99,3 +99,19 @@ def test_the_teachers_path_at_a_goal_need_not_be_met() -> None:
     )
     assert correction_plan(teacher, robot, DT_S) is not None  # the spur's end missed
     assert correction_plan(teacher, robot, DT_S, goals_at=[goal_at]) is None
+
+
+def test_the_person_drives_to_where_the_teacher_reached_a_goal() -> None:
+    teacher = np.concatenate(
+        [
+            _line((0.0, 0.0), (8.0, 0.0)),
+            _line((8.0, 0.0), (8.0, 4.0)),
+            _line((8.0, 4.0), (8.0, 0.0)),
+            TEACHER[200:],
+        ]
+    )
+    goal_at = len(_line((0.0, 0.0), (8.0, 0.0))) + len(_line((8.0, 0.0), (8.0, 4.0)))
+    robot = np.concatenate([_line((0.0, 0.0), (7.0, 0.0)), np.full((500, 2), [7.0, 0.0])])  # stops short
+    plan = correction_plan(teacher, robot, DT_S, goals_at=[goal_at])
+    assert plan is not None and len(plan.stops) == 1
+    assert np.allclose(plan.path_xy[plan.stops[0]], teacher[goal_at])
