@@ -1,9 +1,13 @@
 """A scripted person who corrects a learned table where its robot left the teacher's path.
 
 Given a failed run of the table (its log) and the teacher's path, :func:`correction_plan` finds
-where the robot left the path (:func:`lfdfuse.execute.check.follow`: the last point of the
-teacher's path it met in order). :func:`record_correction` then runs ``teleop --table`` from the
-same start and seed — tick for tick the failed run until the person takes over — and a
+where the robot left the path: the last point of the teacher's path it met in order (as
+:func:`lfdfuse.execute.check.follow` counts them) before it strayed :data:`LEAVE_M` from the
+stretch of the path since (into a dead end the teacher passed by, round the wrong way) or took
+:data:`STALL_S` to meet the next (dithering): a point it meets only after coming back is not
+followed. Where the teacher reached a goal, the points within :data:`GOAL_M` of it need not be met
+(the robot reaches a goal from where its camera sees it). :func:`record_correction` then runs
+``teleop --table`` from the same start and seed — tick for tick the failed run until the person takes over — and a
 :class:`PathPerson` takes over a little before that point, drives the teacher's path (pure
 pursuit, as a Twist client would) through the place the robot missed and some metres past it,
 and hands back; the network drives on. The log is segmented with the table's behaviours.
@@ -12,7 +16,8 @@ and hands back; the network drives on. The log is segmented with the table's beh
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -34,7 +39,19 @@ LEAD_S = 2.0
 #: and drives the teacher's path this far (m) past the first point the robot missed
 PAST_M = 6.0
 RADIUS_M = 1.0  # a path point is met within this (as the check's)
+#: the robot has left the path where it is this far (m) from the stretch between the last point it
+#: met and the next one
+LEAVE_M = 2.5
+#: or where it took this long (s) from one point of the path to the next (stalled, dithering)
+STALL_S = 20.0
+#: the teacher's path this near (m) where it reached a goal need not be met: a robot reaches the
+#: goal from where its camera sees it, and turns back from there
+GOAL_M = 1.5
+#: a robot that strayed and came back drove on along the path when it met the point this far (m)
+#: past the last one it met before straying
+RESUME_M = 2.5
 LOOKAHEAD_M = 0.8
+STOP_M = 0.3  # the teacher's place at a goal is driven to within this
 SPEED_MPS = 0.4
 
 
@@ -44,22 +61,46 @@ class CorrectionPlan:
 
     take_s: float
     path_xy: np.ndarray
+    #: indices into ``path_xy`` where the teacher reached a goal: driven to, not cut short
+    stops: tuple[int, ...] = ()
 
 
-def correction_plan(teacher_xy: np.ndarray, robot_xy: np.ndarray, dt_s: float) -> CorrectionPlan | None:
-    """Where the person takes over a run that left the teacher's path (None: it never left it)."""
-    pts = path_points(teacher_xy).tolist()
+def correction_plan(
+    teacher_xy: np.ndarray, robot_xy: np.ndarray, dt_s: float, goals_at: Sequence[int] = ()
+) -> CorrectionPlan | None:
+    """Where the person takes over a run that left the teacher's path (None: it never left it);
+    ``goals_at``: the teacher's ticks where it reached a goal."""
+    pts = [
+        i
+        for i in path_points(teacher_xy).tolist()
+        if not any(np.hypot(*(teacher_xy[i] - teacher_xy[g])) < GOAL_M for g in goals_at)
+    ]
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(teacher_xy, axis=0).T))])
+    stall = round(STALL_S / dt_s)
     t = 0
     last_i, last_t = pts[0], 0
     missed = None
-    for i in pts:
-        d = np.hypot(*(robot_xy[t:] - teacher_xy[i]).T)
+    k = 0
+    while k < len(pts):
+        i = pts[k]
+        stretch = teacher_xy[last_i : i + 1]
+        away = np.min(np.hypot(*(robot_xy[t:, None, :] - stretch[None, :, :]).transpose(2, 0, 1)), axis=1)
+        left = np.nonzero(away > LEAVE_M)[0]
+        out = int(left[0]) if len(left) else len(away)
+        d = np.hypot(*(robot_xy[t : t + min(out, stall)] - teacher_xy[i]).T)
         hit = np.nonzero(d < RADIUS_M)[0]
-        if not len(hit):
+        if len(hit):
+            t += int(hit[0])
+            last_i, last_t = i, t
+            k += 1
+            continue
+        back = _resumed(teacher_xy, robot_xy, pts, k, arc, t + out, stall) if out < stall else None
+        if back is None:
             missed = i
             break
-        t += int(hit[0])
-        last_i, last_t = i, t
+        k, t = back
+        last_i, last_t = pts[k], t
+        k += 1
     if missed is None:
         return None
     take = max(last_t - round(LEAD_S / dt_s), 1)
@@ -67,9 +108,40 @@ def correction_plan(teacher_xy: np.ndarray, robot_xy: np.ndarray, dt_s: float) -
     here = robot_xy[take]
     lo = max(last_i - 200, 0)
     start = lo + int(np.argmin(np.hypot(*(teacher_xy[lo : last_i + 1] - here).T)))
-    s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(teacher_xy, axis=0).T))])
-    end = int(np.searchsorted(s, s[missed] + PAST_M))
-    return CorrectionPlan(take * dt_s, teacher_xy[start : min(end, len(teacher_xy) - 1) + 1])
+    end = min(int(np.searchsorted(arc, arc[missed] + PAST_M)), len(teacher_xy) - 1)
+    stops = tuple(g - start for g in goals_at if start <= g <= end)
+    return CorrectionPlan(take * dt_s, teacher_xy[start : end + 1], stops)
+
+
+def _resumed(
+    teacher_xy: np.ndarray,
+    robot_xy: np.ndarray,
+    pts: Sequence[int],
+    k: int,
+    arc: np.ndarray,
+    t: int,
+    stall: int,
+) -> tuple[int, int] | None:
+    """A robot that strayed at tick ``t`` from the path before point ``pts[k]``: where it came back
+    to the last point it met and drove on along the path from there (``(point index, tick)`` of
+    the first point :data:`RESUME_M` further on, met within ``stall`` ticks of coming back without
+    straying again), or None (it went elsewhere)."""
+    last = teacher_xy[pts[k - 1]] if k else teacher_xy[pts[0]]
+    near = np.nonzero(np.hypot(*(robot_xy[t:] - last).T) < RADIUS_M)[0]
+    if not len(near):
+        return None
+    t += int(near[0])
+    ahead = [j for j in range(k, len(pts)) if arc[pts[j]] >= arc[pts[max(k - 1, 0)]] + RESUME_M]
+    if not ahead:
+        return None
+    j = ahead[0]
+    stretch = teacher_xy[pts[max(k - 1, 0)] : pts[j] + 1]
+    window = robot_xy[t : t + stall]
+    away = np.min(np.hypot(*(window[:, None, :] - stretch[None, :, :]).transpose(2, 0, 1)), axis=1)
+    left = np.nonzero(away > LEAVE_M)[0]
+    window = window[: int(left[0]) if len(left) else len(window)]
+    hit = np.nonzero(np.hypot(*(window - teacher_xy[pts[j]]).T) < RADIUS_M)[0]
+    return (j, t + int(hit[0])) if len(hit) else None
 
 
 class PathPerson:
@@ -96,8 +168,12 @@ class PathPerson:
         if near >= len(path) - 3:
             self.done = True
             return [Input("handback", "path driven", SOURCE)]
+        stop = next((g for g in self.plan.stops if g >= near), None)
+        if stop is not None and d[stop] < STOP_M:
+            self.plan = replace(self.plan, stops=tuple(g for g in self.plan.stops if g != stop))
+            stop = None
         ahead = near
-        while ahead < len(path) - 1 and d[ahead] < LOOKAHEAD_M:
+        while ahead < len(path) - 1 and d[ahead] < LOOKAHEAD_M and ahead != stop:
             ahead += 1
         gx, gy = path[ahead]
         err = math.atan2(gy - pose.y, gx - pose.x) - pose.theta
@@ -117,6 +193,7 @@ def record_correction(
     teacher_xy: np.ndarray,
     max_time_s: float,
     out: Path,
+    goals_at: Sequence[int] = (),
 ) -> Path | None:
     """Correct ``table``'s failed run (its log ``failed_log``, from ``start`` with ``seed``) with a
     :class:`PathPerson`; returns the segmented correction log, or None when the run never left
@@ -125,7 +202,7 @@ def record_correction(
     if run.pose is None:
         return None
     dt_s = float(np.median(np.diff(run.t_ns))) / 1e9
-    plan = correction_plan(teacher_xy, np.asarray(run.pose[:, :2]), dt_s)
+    plan = correction_plan(teacher_xy, np.asarray(run.pose[:, :2]), dt_s, goals_at)
     if plan is None:
         return None
     opts = TeleopOptions(

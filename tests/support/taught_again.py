@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from lfdfuse import learn
+from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.execute.starts import perturbed_starts
 from lfdfuse.log.reader import read_run
@@ -163,6 +164,7 @@ def teach_again_screened(
     table, poses = s.table, s.poses
     failing = s.before.index(False)
     teacher_xy = np.asarray(read_run(s.demo_segmented).pose)[:, :2]
+    goals_at = [g.stop - 1 for g in read_segmented(s.demo_segmented).segments if g.target is not None]
     corr = record_correction(
         table,
         world=generate_offroute(s.seed),
@@ -170,6 +172,7 @@ def teach_again_screened(
         seed=failing,  # run_starts drives start k with seed k
         failed_log=folder / f"before-{failing}.mcap",
         teacher_xy=teacher_xy,
+        goals_at=goals_at,
         max_time_s=s.max_time_s,
         out=folder / "correction.mcap",
     )
@@ -178,7 +181,20 @@ def teach_again_screened(
         return TaughtAgain(
             s.seed, True, s.before, failing, table_before=table, times={**s.times, **clock.times}
         )
-    res = learn.learn([s.demo_segmented, corr], options=learn.LearnOptions(estimate, subgoals=True))
+    try:
+        res = learn.learn([s.demo_segmented, corr], options=learn.LearnOptions(estimate, subgoals=True))
+    except ConfigError as e:  # the estimate refuses the correction: not fixed, no runs after
+        clock.lap("estimate demo+correction")
+        return TaughtAgain(
+            s.seed,
+            True,
+            s.before,
+            failing,
+            True,
+            verdicts=(f"refused: {e}",),
+            table_before=table,
+            times={**s.times, **clock.times},
+        )
     clock.lap("estimate demo+correction")
     after = tuple(
         bool(r["completed"])

@@ -1,0 +1,117 @@
+"""The scripted person takes over where the robot left the teacher's path."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tests.support.corrections import LEAVE_M, STALL_S, correction_plan
+
+DT_S = 0.1
+STEP_M = 0.04  # 0.4 m/s
+DEAD_END_M = 6.0
+
+
+def _line(a: tuple[float, float], b: tuple[float, float]) -> np.ndarray:
+    n = max(int(round(np.hypot(b[0] - a[0], b[1] - a[1]) / STEP_M)), 1)
+    return np.linspace(a, b, n, endpoint=False)
+
+
+TEACHER = np.concatenate([_line((0.0, 0.0), (20.0, 0.0)), [[20.0, 0.0]]])
+
+
+def test_a_robot_that_follows_the_path_within_the_corridor_is_not_corrected() -> None:
+    robot = TEACHER + np.array([0.0, 0.8])  # a metre aside, all the way
+    assert correction_plan(TEACHER, robot, DT_S) is None
+
+
+def test_a_robot_that_stops_short_is_taken_over_where_it_stopped() -> None:
+    robot = np.concatenate([_line((0.0, 0.0), (8.0, 0.0)), np.full((500, 2), [8.0, 0.0])])
+    plan = correction_plan(TEACHER, robot, DT_S)
+    assert plan is not None
+    x_take = robot[round(plan.take_s / DT_S), 0]
+    assert 6.5 < x_take < 8.0
+    assert plan.path_xy[0, 0] < 8.0 < plan.path_xy[-1, 0]
+
+
+def test_a_robot_that_comes_back_from_a_dead_end_the_wrong_way_is_taken_over_at_its_mouth() -> None:
+    # into a dead end the teacher passed by, round, back the way it came and, a lap later, along
+    # the path: the points it meets after the lap are not followed; the person takes over
+    # before the dead end
+    lap = np.concatenate(
+        [
+            _line((0.0, 0.0), (8.0, 0.0)),
+            _line((8.0, 0.0), (8.0, DEAD_END_M)),
+            _line((8.0, DEAD_END_M), (8.0, 0.0)),
+            _line((8.0, 0.0), (0.0, 0.0)),
+            _line((0.0, 0.0), (20.0, 0.0)),
+        ]
+    )
+    assert DEAD_END_M > LEAVE_M
+    plan = correction_plan(TEACHER, lap, DT_S)
+    assert plan is not None
+    x_take, y_take = lap[round(plan.take_s / DT_S)]
+    assert 6.5 < x_take <= 8.0 and y_take == 0.0
+    assert plan.path_xy[0, 0] < 8.0 and plan.path_xy[-1, 0] > 12.0
+
+
+def test_a_robot_that_turns_round_in_a_dead_end_and_drives_on_is_not_corrected() -> None:
+    out_and_on = np.concatenate(
+        [
+            _line((0.0, 0.0), (8.0, 0.0)),
+            _line((8.0, 0.0), (8.0, DEAD_END_M)),
+            _line((8.0, DEAD_END_M), (8.0, 0.0)),
+            _line((8.0, 0.0), (20.0, 0.0)),
+            [[20.0, 0.0]],
+        ]
+    )
+    assert correction_plan(TEACHER, out_and_on, DT_S) is None
+
+
+def test_a_robot_that_dithers_is_taken_over_where_it_stalled() -> None:
+    # a minute to and fro over half a metre, then on along the path: stalled, not following
+    dither = np.concatenate([_line((8.0, 0.0), (8.3, 0.0)), _line((8.3, 0.0), (8.0, 0.0))] * 40)
+    robot = np.concatenate([_line((0.0, 0.0), (8.0, 0.0)), dither, _line((8.0, 0.0), (20.0, 0.0))])
+    assert len(dither) * DT_S > STALL_S
+    plan = correction_plan(TEACHER, robot, DT_S)
+    assert plan is not None
+    assert 6.5 < robot[round(plan.take_s / DT_S), 0] <= 8.3
+
+
+def test_the_teachers_path_at_a_goal_need_not_be_met() -> None:
+    # the teacher drives up a spur to a goal at its end and back; the robot reaches the goal
+    # from a metre and a half short of where the teacher turned
+    teacher = np.concatenate(
+        [
+            _line((0.0, 0.0), (8.0, 0.0)),
+            _line((8.0, 0.0), (8.0, 4.0)),
+            _line((8.0, 4.0), (8.0, 0.0)),
+            TEACHER[200:],
+        ]
+    )
+    goal_at = len(_line((0.0, 0.0), (8.0, 0.0))) + len(_line((8.0, 0.0), (8.0, 4.0)))
+    robot = np.concatenate(
+        [
+            _line((0.0, 0.0), (8.0, 0.0)),
+            _line((8.0, 0.0), (8.0, 2.6)),
+            _line((8.0, 2.6), (8.0, 0.0)),
+            TEACHER[200:],
+        ]
+    )
+    assert correction_plan(teacher, robot, DT_S) is not None  # the spur's end missed
+    assert correction_plan(teacher, robot, DT_S, goals_at=[goal_at]) is None
+
+
+def test_the_person_drives_to_where_the_teacher_reached_a_goal() -> None:
+    teacher = np.concatenate(
+        [
+            _line((0.0, 0.0), (8.0, 0.0)),
+            _line((8.0, 0.0), (8.0, 4.0)),
+            _line((8.0, 4.0), (8.0, 0.0)),
+            TEACHER[200:],
+        ]
+    )
+    goal_at = len(_line((0.0, 0.0), (8.0, 0.0))) + len(_line((8.0, 0.0), (8.0, 4.0)))
+    robot = np.concatenate([_line((0.0, 0.0), (7.0, 0.0)), np.full((500, 2), [7.0, 0.0])])  # stops short
+    plan = correction_plan(teacher, robot, DT_S, goals_at=[goal_at])
+    assert plan is not None and len(plan.stops) == 1
+    assert np.allclose(plan.path_xy[plan.stops[0]], teacher[goal_at])
