@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse.estimate import discrete_kernels, kernels, model, smc_kernels
+from lfdfuse.estimate import discrete_kernels, kernels, model, smc, smc_kernels
 from lfdfuse.estimate.model import RowData, sum_cos, sum_cos_reference
 
 needs_numba = pytest.mark.skipif(not kernels.SUM_COS.ready(), reason="numba kernels unavailable here")
@@ -27,6 +27,35 @@ def _row(rng: np.random.Generator, steps: int, n: int, zeros: bool) -> tuple[Row
         vectors[rng.uniform(size=(steps, n)) < 0.3] = 0.0
     demo = rng.normal(0.0, 1.0, (steps, 2))
     return model.row_data(vectors, demo), rng.dirichlet(np.full(n, 0.5), 1)[0]
+
+
+def _fused_rows(rng: np.random.Generator, shapes: tuple[tuple[int, int], ...]) -> list[model.Row]:
+    """Continuous rows of ``(behaviours, steps)`` each: a noisy fusion of random vectors."""
+    rows: list[model.Row] = []
+    for n, t in shapes:
+        vectors = rng.normal(0.0, 0.6, (t, n, 2))
+        w = rng.dirichlet(np.full(n, 0.5))
+        demo = np.einsum("tnk,n->tk", vectors, w) + rng.normal(0.0, 0.1, (t, 2))
+        rows.append(model.row_data(vectors, demo))
+    return rows
+
+
+def _sampler_pass(rows: list[model.Row], *, trials: int, particles: int, seed: int) -> smc.SMCResult:
+    """One whole pass of the sampler over ``rows``."""
+    return smc.TemperedSMC(
+        rows,
+        trials=trials,
+        model=model.FusionModel(),
+        params=smc.SMCParams(particles=particles),
+        rng=np.random.default_rng(seed),
+    ).run()
+
+
+class _NotCompiled:
+    """A kernel that never compiles: its caller runs the numpy reference."""
+
+    def ready(self) -> bool:
+        return False
 
 
 @needs_numba
@@ -120,26 +149,7 @@ def test_the_sampler_skipping_finished_trials_gives_the_same_draws(
 ) -> None:
     """With the compiled likelihood a row's finished trials are not computed again: every draw,
     evidence and acceptance is the one computing them all gives, to the bit."""
-    from lfdfuse.estimate import smc
-    from lfdfuse.estimate.smc import SMCParams, TemperedSMC
-
-    rng = np.random.default_rng(seed)
-    rows = []
-    for n, t in ((3, 80), (5, 200), (2, 30)):
-        vectors = rng.normal(0.0, 0.6, (t, n, 2))
-        w = rng.dirichlet(np.full(n, 0.5))
-        demo = np.einsum("tnk,n->tk", vectors, w) + rng.normal(0.0, 0.1, (t, 2))
-        rows.append(model.row_data(vectors, demo))
-
-    def run() -> smc.SMCResult:
-        return TemperedSMC(
-            rows,
-            trials=5,
-            model=model.FusionModel(),
-            params=SMCParams(particles=64),
-            rng=np.random.default_rng(seed),
-        ).run()
-
+    rows = _fused_rows(np.random.default_rng(seed), ((3, 80), (5, 200), (2, 30)))
     skipped: list[int] = []
     real = smc._Rows.loglik
 
@@ -151,9 +161,9 @@ def test_the_sampler_skipping_finished_trials_gives_the_same_draws(
         return real(self, w, active, chains)
 
     monkeypatch.setattr(smc._Rows, "loglik", counting)
-    fast = run()
+    fast = _sampler_pass(rows, trials=5, particles=64, seed=seed)
     monkeypatch.setattr(smc, "subset_exact", lambda _data: False)
-    whole = run()
+    whole = _sampler_pass(rows, trials=5, particles=64, seed=seed)
     assert sum(skipped) > 0  # some trials finished before others: the subset path ran
     for a, b in zip(
         (fast.logw, fast.log_evidence, fast.acceptance),
@@ -302,33 +312,10 @@ def test_the_compiled_move_leaves_inactive_chains_as_they_are() -> None:
 def test_the_sampler_with_compiled_moves_gives_the_reference_draws(monkeypatch: pytest.MonkeyPatch) -> None:
     """A whole pass (rows of 2 to 12 behaviours, padded, trials finishing apart) with the compiled
     moves and with the numpy ones: the same draws, to the bit on x86-64."""
-    from lfdfuse.estimate import smc
-    from lfdfuse.estimate.smc import SMCParams, TemperedSMC
-
-    rng = np.random.default_rng(4)
-    rows = []
-    for n, t in ((3, 80), (5, 200), (2, 30), (9, 50), (12, 40)):
-        vectors = rng.normal(0.0, 0.6, (t, n, 2))
-        w = rng.dirichlet(np.full(n, 0.5))
-        demo = np.einsum("tnk,n->tk", vectors, w) + rng.normal(0.0, 0.1, (t, 2))
-        rows.append(model.row_data(vectors, demo))
-
-    def run() -> smc.SMCResult:
-        return TemperedSMC(
-            rows,
-            trials=3,
-            model=model.FusionModel(),
-            params=SMCParams(particles=48),
-            rng=np.random.default_rng(5),
-        ).run()
-
-    class NotCompiled:
-        def ready(self) -> bool:
-            return False
-
-    fast = run()
-    monkeypatch.setattr(smc, "MOVE_FRAME", NotCompiled())  # the numpy moves, the same likelihood
-    ref = run()
+    rows = _fused_rows(np.random.default_rng(4), ((3, 80), (5, 200), (2, 30), (9, 50), (12, 40)))
+    fast = _sampler_pass(rows, trials=3, particles=48, seed=5)
+    monkeypatch.setattr(smc, "MOVE_FRAME", _NotCompiled())  # the numpy moves, the same likelihood
+    ref = _sampler_pass(rows, trials=3, particles=48, seed=5)
     assert fast.iterations == ref.iterations
     np.testing.assert_allclose(np.exp(fast.logw), np.exp(ref.logw), rtol=0.0, atol=1e-9)
     if platform.machine() in ("x86_64", "AMD64"):
@@ -550,9 +537,6 @@ def test_the_sampler_with_the_compiled_discrete_likelihood_gives_the_reference_d
     mixing a scripted demo's steps with a person's decisions) with the compiled discrete
     likelihood and with its numpy reference: the same draws, to the bit where numpy's elementwise
     functions are libm's (a pass is chaotic: one ulp there is another posterior)."""
-    from lfdfuse.estimate import smc
-    from lfdfuse.estimate.smc import SMCParams, TemperedSMC
-
     rng = np.random.default_rng(6)
     rows: list[model.Row] = [
         _decisions(rng, 120, 4, True, "one", 0.05),
@@ -565,23 +549,10 @@ def test_the_sampler_with_the_compiled_discrete_likelihood_gives_the_reference_d
         )
     )
 
-    def run() -> smc.SMCResult:
-        return TemperedSMC(
-            rows,
-            trials=2,
-            model=model.FusionModel(),
-            params=SMCParams(particles=96),
-            rng=np.random.default_rng(2),
-        ).run()
-
-    class NotCompiled:
-        def ready(self) -> bool:
-            return False
-
-    fast = run()
-    monkeypatch.setattr(model, "DISCRETE_BLOCK", NotCompiled())
+    fast = _sampler_pass(rows, trials=2, particles=96, seed=2)
+    monkeypatch.setattr(model, "DISCRETE_BLOCK", _NotCompiled())
     with np.errstate(divide="ignore"):
-        ref = run()
+        ref = _sampler_pass(rows, trials=2, particles=96, seed=2)
     assert fast.iterations == ref.iterations
     np.testing.assert_allclose(np.exp(fast.logw), np.exp(ref.logw), rtol=0.0, atol=1e-9)
     if _libm_elementwise():
