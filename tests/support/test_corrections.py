@@ -77,18 +77,17 @@ def test_a_robot_that_dithers_is_taken_over_where_it_stalled() -> None:
     assert 6.5 < robot[round(plan.take_s / DT_S), 0] <= 8.3
 
 
+def _spur_to_a_goal() -> tuple[np.ndarray, int]:
+    """The teacher drives up a spur to a goal at its end and back, then on: its path and the
+    tick it reached the goal."""
+    up = [_line((0.0, 0.0), (8.0, 0.0)), _line((8.0, 0.0), (8.0, 4.0))]
+    teacher = np.concatenate([*up, _line((8.0, 4.0), (8.0, 0.0)), TEACHER[200:]])
+    return teacher, sum(len(a) for a in up)
+
+
 def test_the_teachers_path_at_a_goal_need_not_be_met() -> None:
-    # the teacher drives up a spur to a goal at its end and back; the robot reaches the goal
-    # from a metre and a half short of where the teacher turned
-    teacher = np.concatenate(
-        [
-            _line((0.0, 0.0), (8.0, 0.0)),
-            _line((8.0, 0.0), (8.0, 4.0)),
-            _line((8.0, 4.0), (8.0, 0.0)),
-            TEACHER[200:],
-        ]
-    )
-    goal_at = len(_line((0.0, 0.0), (8.0, 0.0))) + len(_line((8.0, 0.0), (8.0, 4.0)))
+    # the robot reaches the goal from a metre and a half short of where the teacher turned
+    teacher, goal_at = _spur_to_a_goal()
     robot = np.concatenate(
         [
             _line((0.0, 0.0), (8.0, 0.0)),
@@ -102,15 +101,7 @@ def test_the_teachers_path_at_a_goal_need_not_be_met() -> None:
 
 
 def test_the_person_drives_to_where_the_teacher_reached_a_goal() -> None:
-    teacher = np.concatenate(
-        [
-            _line((0.0, 0.0), (8.0, 0.0)),
-            _line((8.0, 0.0), (8.0, 4.0)),
-            _line((8.0, 4.0), (8.0, 0.0)),
-            TEACHER[200:],
-        ]
-    )
-    goal_at = len(_line((0.0, 0.0), (8.0, 0.0))) + len(_line((8.0, 0.0), (8.0, 4.0)))
+    teacher, goal_at = _spur_to_a_goal()
     robot = np.concatenate([_line((0.0, 0.0), (7.0, 0.0)), np.full((500, 2), [7.0, 0.0])])  # stops short
     plan = correction_plan(teacher, robot, DT_S, goals_at=[goal_at])
     assert plan is not None and len(plan.stops) == 1
