@@ -5,8 +5,8 @@ where the robot left the path: the last point of the teacher's path it met in or
 :func:`lfdfuse.execute.check.follow` counts them) before it strayed :data:`LEAVE_M` from the
 stretch of the path since (into a dead end the teacher passed by, round the wrong way) or took
 :data:`STALL_S` to meet the next (dithering): a point it meets only after coming back is not
-followed. Where the teacher reached a goal, the points within :data:`GOAL_M` of it need not be met
-(the robot reaches a goal from where its camera sees it). :func:`record_correction` then runs
+followed. Where the teacher reached a goal the robot reached too, the points within :data:`GOAL_M`
+of it need not be met (the robot reaches a goal from where its camera sees it). :func:`record_correction` then runs
 ``teleop --table`` from the same start and seed — tick for tick the failed run until the person takes over — and a
 :class:`PathPerson` takes over a little before that point, drives the teacher's path (pure
 pursuit, as a Twist client would) through the place the robot missed and some metres past it,
@@ -24,7 +24,8 @@ import numpy as np
 
 from lfdfuse.execute.check import path_points
 from lfdfuse.execute.correct import correct, correction_driver
-from lfdfuse.log.reader import read_run
+from lfdfuse.log import lfd
+from lfdfuse.log.reader import iter_messages, read_run
 from lfdfuse.network.table import FusionTable
 from lfdfuse.robot.pose import Pose
 from lfdfuse.segment.pipeline import segment_file
@@ -47,11 +48,17 @@ STALL_S = 20.0
 #: the teacher's path this near (m) where it reached a goal need not be met: a robot reaches the
 #: goal from where its camera sees it, and turns back from there
 GOAL_M = 1.5
+#: a robot that met the teacher's path this far (m of the teacher's travel) past a goal it never
+#: reached drove on without it
+LATE_M = 3.0
 #: a robot that strayed and came back drove on along the path when it met the point this far (m)
 #: past the last one it met before straying
 RESUME_M = 2.5
 LOOKAHEAD_M = 0.8
-STOP_M = 0.3  # the teacher's place at a goal is driven to within this
+STOP_M = 0.3  # the teacher's place at a goal is driven to within this ...
+#: ... and on past it this far (m) the way the teacher was going there: the teacher reached the
+#: goal at the first tick its camera could, at the edge of the camera's reach
+INTO_GOAL_M = 0.3
 SPEED_MPS = 0.4
 
 
@@ -66,23 +73,42 @@ class CorrectionPlan:
 
 
 def correction_plan(
-    teacher_xy: np.ndarray, robot_xy: np.ndarray, dt_s: float, goals_at: Sequence[int] = ()
+    teacher_xy: np.ndarray,
+    robot_xy: np.ndarray,
+    dt_s: float,
+    goals_at: Sequence[int] = (),
+    reached_at: Sequence[int] | None = None,
 ) -> CorrectionPlan | None:
     """Where the person takes over a run that left the teacher's path (None: it never left it);
-    ``goals_at``: the teacher's ticks where it reached a goal."""
+    ``goals_at``: the teacher's ticks where it reached a goal, in order; ``reached_at``: the
+    robot's ticks where it reached them, in order, as many as it reached (None: each in time). The
+    path near a goal the robot never reached must be met, and a robot that met the teacher's path
+    past it missed it there."""
+    reached = list(goals_at if reached_at is None else reached_at)
+    skip = list(goals_at)[: len(reached)]
     pts = [
         i
         for i in path_points(teacher_xy).tolist()
-        if not any(np.hypot(*(teacher_xy[i] - teacher_xy[g])) < GOAL_M for g in goals_at)
+        if not any(np.hypot(*(teacher_xy[i] - teacher_xy[g])) < GOAL_M for g in skip)
     ]
     arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(teacher_xy, axis=0).T))])
     stall = round(STALL_S / dt_s)
     t = 0
     last_i, last_t = pts[0], 0
+    met: list[tuple[int, int]] = []  # (point, tick) of the points met, in order
     missed = None
     k = 0
     while k < len(pts):
         i = pts[k]
+        late = next(
+            (n for n, g in enumerate(goals_at) if n >= len(reached) and arc[i] > arc[g] + LATE_M),
+            None,
+        )
+        if reached_at is not None and late is not None:
+            # on past a goal it never reached: missed there, taken over before it
+            missed = goals_at[late]
+            last_i, last_t = max(((a, b) for a, b in met if a <= missed), default=(pts[0], 0))
+            break
         stretch = teacher_xy[last_i : i + 1]
         away = np.min(np.hypot(*(robot_xy[t:, None, :] - stretch[None, :, :]).transpose(2, 0, 1)), axis=1)
         left = np.nonzero(away > LEAVE_M)[0]
@@ -92,6 +118,7 @@ def correction_plan(
         if len(hit):
             t += int(hit[0])
             last_i, last_t = i, t
+            met.append((i, t))
             k += 1
             continue
         back = _resumed(teacher_xy, robot_xy, pts, k, arc, t + out, stall) if out < stall else None
@@ -104,13 +131,38 @@ def correction_plan(
     if missed is None:
         return None
     take = max(last_t - round(LEAD_S / dt_s), 1)
-    # the path from the teacher's point nearest where the robot is at the takeover
+    # the path from the teacher's point nearest where the robot is at the takeover, up to the
+    # first point the robot met after it (where the teacher drove in and out of a spur, the way
+    # out passes where the robot is too, but the robot has not come to it yet)
     here = robot_xy[take]
-    lo = max(last_i - 200, 0)
-    start = lo + int(np.argmin(np.hypot(*(teacher_xy[lo : last_i + 1] - here).T)))
+    hi = next((a for a, b in met if b > take and a <= last_i), last_i)
+    lo = max(hi - 200, 0)
+    start = lo + int(np.argmin(np.hypot(*(teacher_xy[lo : hi + 1] - here).T)))
     end = min(int(np.searchsorted(arc, arc[missed] + PAST_M)), len(teacher_xy) - 1)
-    stops = tuple(g - start for g in goals_at if start <= g <= end)
-    return CorrectionPlan(take * dt_s, teacher_xy[start : end + 1], stops)
+    return _driving_into_goals(
+        teacher_xy, take * dt_s, start, end, [g for g in goals_at if start <= g <= end]
+    )
+
+
+def _driving_into_goals(
+    teacher_xy: np.ndarray, take_s: float, start: int, end: int, goals: Sequence[int]
+) -> CorrectionPlan:
+    """The plan driving the teacher's path ``start..end``, where the teacher reached each of
+    ``goals`` on :data:`INTO_GOAL_M` the way it was going, and back: the teacher reached a goal at
+    the first tick its camera could, at the edge of the camera's reach."""
+    pieces: list[np.ndarray] = []
+    stops: list[int] = []
+    at = start
+    for g in sorted(goals):
+        way = teacher_xy[g] - teacher_xy[max(g - 5, start)]
+        norm = float(np.hypot(*way))
+        pieces.append(teacher_xy[at : g + 1])
+        if norm > 1e-9:
+            pieces.append((teacher_xy[g] + INTO_GOAL_M * way / norm)[None, :])
+        stops.append(sum(len(p) for p in pieces) - 1)
+        at = g + 1
+    pieces.append(teacher_xy[at : end + 1])
+    return CorrectionPlan(take_s, np.concatenate(pieces), tuple(stops))
 
 
 def _resumed(
@@ -202,7 +254,14 @@ def record_correction(
     if run.pose is None:
         return None
     dt_s = float(np.median(np.diff(run.t_ns))) / 1e9
-    plan = correction_plan(teacher_xy, np.asarray(run.pose[:, :2]), dt_s, goals_at)
+    achieved = [
+        len(lfd.NetworkStep.decode(data).achieved)
+        for *_, data in iter_messages(failed_log, topics=[lfd.NetworkStep.TOPIC])
+    ]
+    reached_at = [
+        next(i for i, n in enumerate(achieved) if n >= k) for k in range(1, max(achieved, default=0) + 1)
+    ]
+    plan = correction_plan(teacher_xy, np.asarray(run.pose[:, :2]), dt_s, goals_at, reached_at)
     if plan is None:
         return None
     opts = TeleopOptions(

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tests.support.corrections import LEAVE_M, STALL_S, correction_plan
+from tests.support.corrections import INTO_GOAL_M, LEAVE_M, STALL_S, CorrectionPlan, correction_plan
 
 DT_S = 0.1
 STEP_M = 0.04  # 0.4 m/s
@@ -85,6 +85,15 @@ def _spur_to_a_goal() -> tuple[np.ndarray, int]:
     return teacher, sum(len(a) for a in up)
 
 
+def _drives_into(plan: CorrectionPlan, goal_xy: np.ndarray) -> bool:
+    """The person drives to the teacher's place at the goal, then on into it, and stops there."""
+    (stop,) = plan.stops
+    return bool(
+        np.allclose(plan.path_xy[stop - 1], goal_xy)
+        and np.isclose(np.hypot(*(plan.path_xy[stop] - goal_xy)), INTO_GOAL_M)
+    )
+
+
 def test_the_teachers_path_at_a_goal_need_not_be_met() -> None:
     # the robot reaches the goal from a metre and a half short of where the teacher turned
     teacher, goal_at = _spur_to_a_goal()
@@ -98,6 +107,8 @@ def test_the_teachers_path_at_a_goal_need_not_be_met() -> None:
     )
     assert correction_plan(teacher, robot, DT_S) is not None  # the spur's end missed
     assert correction_plan(teacher, robot, DT_S, goals_at=[goal_at]) is None
+    # ... where it reached it: a robot that never did must meet the spur's end as the teacher did
+    assert correction_plan(teacher, robot, DT_S, goals_at=[goal_at], reached_at=[]) is not None
 
 
 def test_the_person_drives_to_where_the_teacher_reached_a_goal() -> None:
@@ -105,4 +116,31 @@ def test_the_person_drives_to_where_the_teacher_reached_a_goal() -> None:
     robot = np.concatenate([_line((0.0, 0.0), (7.0, 0.0)), np.full((500, 2), [7.0, 0.0])])  # stops short
     plan = correction_plan(teacher, robot, DT_S, goals_at=[goal_at])
     assert plan is not None and len(plan.stops) == 1
-    assert np.allclose(plan.path_xy[plan.stops[0]], teacher[goal_at])
+    assert _drives_into(plan, teacher[goal_at])
+
+
+def test_a_robot_that_drove_to_a_goal_without_reaching_it_is_brought_to_it() -> None:
+    # the robot drives the teacher's path up the spur and back (its camera never saw the goal):
+    # the person takes over before the goal and drives to where the teacher reached it
+    teacher, goal_at = _spur_to_a_goal()
+    assert correction_plan(teacher, teacher, DT_S, goals_at=[goal_at]) is None  # it reached the goal
+    plan = correction_plan(teacher, teacher, DT_S, goals_at=[goal_at], reached_at=[])
+    assert plan is not None and len(plan.stops) == 1
+    assert plan.take_s < goal_at * DT_S
+    assert _drives_into(plan, teacher[goal_at])
+
+
+def test_the_person_starts_on_the_way_into_a_spur_not_on_the_way_out() -> None:
+    # the teacher drove up a spur to a goal and back down beside its way up; the robot drives up
+    # where the teacher came down, reaches the goal from the spur's middle (its camera sees it
+    # there) and stops: the person takes over on the teacher's way in, which the robot had not
+    # left, and drives to the teacher's place at the goal
+    up = [_line((0.0, 0.0), (8.0, 0.0)), _line((8.0, 0.0), (8.0, 4.0))]
+    teacher = np.concatenate([*up, _line((8.4, 4.0), (8.4, 0.0)), _line((8.4, 0.0), (20.0, 0.0))])
+    goal_at = sum(len(a) for a in up)
+    stop = np.full((500, 2), [8.4, 2.4])
+    robot = np.concatenate([_line((0.0, 0.0), (8.4, 0.0)), _line((8.4, 0.0), (8.4, 2.4)), stop])
+    plan = correction_plan(teacher, robot, DT_S, goals_at=[goal_at], reached_at=[len(robot) - len(stop)])
+    assert plan is not None
+    assert plan.path_xy[0, 0] == 8.0  # on the teacher's way up
+    assert len(plan.stops) == 1 and _drives_into(plan, teacher[goal_at])
