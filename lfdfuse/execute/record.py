@@ -15,7 +15,6 @@ from lfdfuse.behaviors import catalogue
 from lfdfuse.log import lfd
 from lfdfuse.log import messages as msg
 from lfdfuse.log.writer import LogWriter
-from lfdfuse.network.runtime import step_name_of
 from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.robot.readings import Observation
 
@@ -32,47 +31,47 @@ class LfdRecorder:
             log.add_topic(topic, schema)
 
     def record(self, obs: Observation, command: tuple[float, float]) -> None:
-        dec, out, t_ns = self.driver.last, self.driver.last_outputs, obs.t_ns
+        driver = self.driver
+        dec, out, t_ns = driver.last, driver.last_outputs, obs.t_ns
         if dec is None or out is None:
             return
-        names = self.driver.table.behaviors
-        vec = np.round(out.vectors[0], 6)
-        app = out.applicable[0]
+        names = driver.table.behaviors
+        xy = np.round(out.vectors[0], 6).tolist()  # Python floats: the same numbers as float(vec[j, i])
+        applicable = out.applicable[0].tolist()
         log = self.log
-        log.write_raw("/lfd/behaviors", t_ns, lfd.encode_behaviors(t_ns, names, vec, app, out.goal_met[0]))
-        applicable = app.tolist()
+        log.write_raw(
+            "/lfd/behaviors",
+            t_ns,
+            lfd.encode_behavior_lists(t_ns, names, xy, applicable, out.goal_met[0].tolist()),
+        )
         log.write_raw(
             "/lfd/bac", t_ns, lfd.encode_bac(t_ns, dec.bac, [n for j, n in enumerate(names) if applicable[j]])
         )
+        step = dec.step
         log.write_raw(
             "/lfd/step",
             t_ns,
             lfd.encode_step(
                 t_ns,
-                step=step_name_of(dec.path, self.driver.table) if dec.step is not None else None,
-                goal=dec.step.goal if dec.step is not None else None,
+                step=driver.step_name(dec.path) if step is not None else None,
+                goal=step.goal if step is not None else None,
                 bac=dec.bac,
                 default_weights=dec.unseen,
-                achieved=[g for g, _ in self.driver.reached],
+                achieved=[g for g, _ in driver.reached],
             ),
         )
-        log.write_raw(
-            "/lfd/fused", t_ns, lfd.encode_fused(t_ns, float(dec.fused[0]), float(dec.fused[1]), dec.weights)
-        )
-        xy = vec.tolist()  # Python floats: the same numbers as float(vec[j, i])
+        fx, fy = dec.fused.tolist()
+        log.write_raw("/lfd/fused", t_ns, lfd.encode_fused(t_ns, fx, fy, dec.weights))
+        weights, colors = dec.weights, self.colors
         arrows = [
-            msg.Arrow(
-                dec.weights[n] * xy[j][0],
-                dec.weights[n] * xy[j][1],
-                self.colors[n],  # the behaviour's colour in every figure
-                1.5,
-            )
+            # the behaviour's colour in every figure
+            (weights[n] * xy[j][0], weights[n] * xy[j][1], colors[n], 1.5)
             for j, n in enumerate(names)
-            if applicable[j] and n in dec.weights
+            if applicable[j] and n in weights
         ]
-        arrows.append(msg.Arrow(float(dec.fused[0]), float(dec.fused[1]), (1.0, 1.0, 1.0), 1.5))
-        log.write("/lfd/overlay", t_ns, msg.arrow_scene(t_ns, "fusion", arrows))
-        ask = self.driver.help_now
+        arrows.append((fx, fy, (1.0, 1.0, 1.0), 1.5))
+        log.write("/lfd/overlay", t_ns, msg.arrow_scene_of(t_ns, "fusion", arrows))
+        ask = driver.help_now
         if ask is not None:
             log.write_raw(
                 "/lfd/network", t_ns, lfd.encode_help(t_ns, step=ask.step, bac=ask.bac, why=ask.why)

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar, Literal, get_args
 
 import numpy as np
+import orjson
 
 from lfdfuse.log.codec import (
     Codec,
@@ -103,16 +104,9 @@ class BehaviorRow(Codec):
     goal_met: np.ndarray
 
     def to_dict(self) -> dict[str, Any]:
-        vec = self.vectors.tolist()
-        app = self.applicable.tolist()
-        goal = self.goal_met.tolist()
-        return {
-            "timestamp": stamp(self.t_ns),
-            "behaviors": [
-                {"name": n, "x": vec[j][0], "y": vec[j][1], "applicable": app[j], "goal_met": goal[j]}
-                for j, n in enumerate(self.names)
-            ],
-        }
+        return behaviors_dict(
+            self.t_ns, self.names, self.vectors.tolist(), self.applicable.tolist(), self.goal_met.tolist()
+        )
 
     @classmethod
     def from_dict(cls, msg: dict[str, Any]) -> BehaviorRow:
@@ -151,11 +145,31 @@ class BehaviorRow(Codec):
         return cls(t_ns, names, vectors, np.array(app, dtype=bool), np.array(goal, dtype=bool))
 
 
+def behaviors_dict(
+    t_ns: int, names: Sequence[str], xy: list[list[float]], applicable: list[bool], goal_met: list[bool]
+) -> dict[str, Any]:
+    """:meth:`BehaviorRow.to_dict` of its fields as Python lists (``ndarray.tolist()``)."""
+    return {
+        "timestamp": stamp(t_ns),
+        "behaviors": [
+            {"name": n, "x": xy[j][0], "y": xy[j][1], "applicable": applicable[j], "goal_met": goal_met[j]}
+            for j, n in enumerate(names)
+        ],
+    }
+
+
 def encode_behaviors(
     t_ns: int, names: Sequence[str], vectors: np.ndarray, applicable: np.ndarray, goal_met: np.ndarray
 ) -> bytes:
     """``vectors (K, 2)`` already rounded by the caller (one ``np.round`` over a whole log is faster)."""
-    return BehaviorRow(t_ns, tuple(names), vectors, applicable, goal_met).encode()
+    return encode_behavior_lists(t_ns, names, vectors.tolist(), applicable.tolist(), goal_met.tolist())
+
+
+def encode_behavior_lists(
+    t_ns: int, names: Sequence[str], xy: list[list[float]], applicable: list[bool], goal_met: list[bool]
+) -> bytes:
+    """:func:`encode_behaviors` of the arrays as Python lists (a caller that has them already)."""
+    return orjson.dumps(behaviors_dict(t_ns, names, xy, applicable, goal_met))
 
 
 def decode_behaviors(data: bytes) -> BehaviorRow:
@@ -229,7 +243,7 @@ class Bac(Codec):
     applicable: tuple[str, ...]
 
     def to_dict(self) -> dict[str, Any]:
-        return {"timestamp": stamp(self.t_ns), "bac": self.bac, "applicable": list(self.applicable)}
+        return bac_dict(self.t_ns, self.bac, self.applicable)
 
     @classmethod
     def _from_json(cls, msg: dict[str, Any]) -> Bac:
@@ -237,8 +251,12 @@ class Bac(Codec):
         return cls(timestamp_ns(msg), as_count(msg["bac"], "bac"), as_names(msg["applicable"], "applicable"))
 
 
+def bac_dict(t_ns: int, bac: int, applicable: Sequence[str]) -> dict[str, Any]:
+    return {"timestamp": stamp(t_ns), "bac": bac, "applicable": list(applicable)}
+
+
 def encode_bac(t_ns: int, bac: int, applicable: Sequence[str]) -> bytes:
-    return Bac(t_ns, bac, tuple(applicable)).encode()
+    return orjson.dumps(bac_dict(t_ns, bac, applicable))
 
 
 def decode_bac(data: bytes) -> Bac:
@@ -307,14 +325,7 @@ class NetworkStep(Codec):
     achieved: tuple[str, ...]
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "timestamp": stamp(self.t_ns),
-            "step": self.step,
-            "goal": self.goal,
-            "bac": self.bac,
-            "default_weights": self.default_weights,
-            "achieved": list(self.achieved),
-        }
+        return step_dict(self.t_ns, self.step, self.goal, self.bac, self.default_weights, self.achieved)
 
     @classmethod
     def _from_json(cls, msg: dict[str, Any]) -> NetworkStep:
@@ -329,10 +340,23 @@ class NetworkStep(Codec):
         )
 
 
+def step_dict(
+    t_ns: int, step: str | None, goal: str | None, bac: int, default_weights: bool, achieved: Sequence[str]
+) -> dict[str, Any]:
+    return {
+        "timestamp": stamp(t_ns),
+        "step": step,
+        "goal": goal,
+        "bac": bac,
+        "default_weights": default_weights,
+        "achieved": list(achieved),
+    }
+
+
 def encode_step(
     t_ns: int, *, step: str | None, goal: str | None, bac: int, default_weights: bool, achieved: Sequence[str]
 ) -> bytes:
-    return NetworkStep(t_ns, step, goal, bac, default_weights, tuple(achieved)).encode()
+    return orjson.dumps(step_dict(t_ns, step, goal, bac, default_weights, achieved))
 
 
 @dataclass(frozen=True)
@@ -350,12 +374,7 @@ class FusedVector(Codec):
     weights: dict[str, float]
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "timestamp": stamp(self.t_ns),
-            "x": self.x,
-            "y": self.y,
-            "weights": {k: round(v, 4) for k, v in self.weights.items()},
-        }
+        return fused_dict(self.t_ns, self.x, self.y, self.weights)
 
     @classmethod
     def _from_json(cls, msg: dict[str, Any]) -> FusedVector:
@@ -369,8 +388,12 @@ class FusedVector(Codec):
         return cls(timestamp_ns(msg), as_number(msg["x"], "x"), as_number(msg["y"], "y"), weights)
 
 
+def fused_dict(t_ns: int, x: float, y: float, weights: dict[str, float]) -> dict[str, Any]:
+    return {"timestamp": stamp(t_ns), "x": x, "y": y, "weights": {k: round(v, 4) for k, v in weights.items()}}
+
+
 def encode_fused(t_ns: int, x: float, y: float, weights: dict[str, float]) -> bytes:
-    return FusedVector(t_ns, x, y, weights).encode()
+    return orjson.dumps(fused_dict(t_ns, x, y, weights))
 
 
 def decode_fused(data: bytes) -> FusedVector:

@@ -93,22 +93,30 @@ class Arrow:
 
 def arrow_scene(t_ns: int, entity_id: str, arrows: Sequence[Arrow]) -> dict[str, Any]:
     """A ``foxglove.SceneUpdate`` with arrows in the robot frame (behaviour overlay)."""
+    return arrow_scene_of(t_ns, entity_id, [(a.vx, a.vy, a.color, a.scale_m) for a in arrows])
+
+
+#: every arrow's position in the robot frame
+_ARROW_AT = {"x": 0.0, "y": 0.0, "z": 0.3}
+
+
+def arrow_scene_of(
+    t_ns: int, entity_id: str, arrows: Sequence[tuple[float, float, tuple[float, float, float], float]]
+) -> dict[str, Any]:
+    """:func:`arrow_scene` of arrows as ``(vx, vy, color, scale_m)`` tuples (the same message)."""
     prims = []
-    for a in arrows:
-        length = math.hypot(a.vx, a.vy) * a.scale_m
+    for vx, vy, color, scale_m in arrows:
+        length = math.hypot(vx, vy) * scale_m
         if length <= 1e-6:
             continue
         prims.append(
             {
-                "pose": {
-                    "position": {"x": 0.0, "y": 0.0, "z": 0.3},
-                    "orientation": quat_z(math.atan2(a.vy, a.vx)),
-                },
+                "pose": {"position": dict(_ARROW_AT), "orientation": quat_z(math.atan2(vy, vx))},
                 "shaft_length": max(length - 0.1, 0.01),
                 "shaft_diameter": 0.03,
                 "head_length": 0.1,
                 "head_diameter": 0.08,
-                "color": _color(*a.color),
+                "color": _color(*color),
             }
         )
     ent = _entity(t_ns, entity_id, ROBOT_FRAME, arrows=prims)
