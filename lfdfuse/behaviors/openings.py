@@ -206,7 +206,7 @@ class OpeningTracker:
         self._run = [0, 0]  # ticks the flag has disagreed with ``inside``
         self._turns: deque[float] = deque(maxlen=params.steady_ticks)
 
-    def update(self, open_now: np.ndarray, turn_rad: float = 0.0) -> tuple[bool, bool]:
+    def update(self, open_now: np.ndarray | tuple[bool, bool], turn_rad: float = 0.0) -> tuple[bool, bool]:
         """Onset (left, right) at this tick from its open flags ``(2,)`` and this tick's
         heading change (rad); while turning, the sides read as closed."""
         self._turns.append(turn_rad)
@@ -276,7 +276,7 @@ class OpeningSensor:
         while len(self._path) > 1 and self._path[1][0] <= self._odo_m - self.params.lag_m:
             self._path.popleft()
         ranges = np.asarray(ranges_m, dtype=np.float64)
-        compiled = kernels.SIDE_OPEN.ready() and kernels.CORRIDOR.ready() and kernels.AHEAD.ready()
+        compiled = kernels.HELD.ready() and kernels.CORRIDOR.ready()
         self._corridor.append((self._odo_m, self._in_corridor(ranges, compiled)))
         back = self._odo_m - self.params.lag_m - self.params.corridor_back_m
         while len(self._corridor) > 1 and self._corridor[1][0] <= back:
@@ -297,6 +297,7 @@ class OpeningSensor:
         held = self._path[0][1] if self.holding else self._heading
         held_turn, self._held = held - self._held, held
         self.held_turn_rad = self._heading - held
+        flags: np.ndarray | tuple[bool, bool]
         if compiled:
             flags, self.ahead_m = self._compiled(ranges, held - self._heading)
         else:
@@ -307,22 +308,23 @@ class OpeningSensor:
                 ranges, self.geometry, self.params, offset_rad=held - self._heading
             )
         if self.holding and self._spinning():
-            flags = np.zeros(2, dtype=bool)
+            flags = (False, False)
         return self.tracker.update(flags, held_turn)
 
-    def _compiled(self, ranges: np.ndarray, offset: float) -> tuple[np.ndarray, float]:
-        """The open flags and the way ahead of :meth:`update` by the compiled loops: the same
-        bearings as the references wrap (once, where the layout's are already wrapped)."""
+    def _compiled(self, ranges: np.ndarray, offset: float) -> tuple[tuple[bool, bool], float]:
+        """The open flags and the way ahead of :meth:`update` by the compiled loops (one call of
+        :data:`~lfdfuse.behaviors.kernels.HELD`): the same bearings as the references wrap
+        (once, where the layout's are already wrapped)."""
         g, p = self.geometry, self.params
         if offset == 0.0:
             side, ahead = self._side0, self._ahead0
         else:
             side = _wrap(self._bear - offset)
             ahead = side if self._one_wrap else _wrap(g.angles - offset)
-        flags = np.zeros((1, 2), dtype=bool)
-        r = ranges[None, :]
-        kernels.SIDE_OPEN(r, side[None, :], self._far_m, p.inner_rad, p.outer_rad, p.fraction, flags)
-        return flags[0], float(kernels.AHEAD(ranges, ahead, p.ahead_beam_rad))
+        left, right, ahead_m = kernels.HELD(
+            ranges, side, ahead, self._far_m, p.inner_rad, p.outer_rad, p.fraction, p.ahead_beam_rad
+        )
+        return (bool(left), bool(right)), float(ahead_m)
 
     def _in_corridor(self, ranges: np.ndarray, compiled: bool = False) -> bool:
         """Walls abeam on both sides, at most ``open_m`` apart (a beam with no return is far)."""

@@ -70,7 +70,7 @@ class LfdRecorder:
             if applicable[j] and n in weights
         ]
         arrows.append((fx, fy, (1.0, 1.0, 1.0), 1.5))
-        log.write("/lfd/overlay", t_ns, msg.arrow_scene_of(t_ns, "fusion", arrows))
+        log.write_raw("/lfd/overlay", t_ns, msg.encode_arrow_scene(t_ns, "fusion", arrows))
         ask = driver.help_now
         if ask is not None:
             log.write_raw(

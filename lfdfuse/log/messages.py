@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from lfdfuse.log.scene import Arrow, arrow_scene, arrow_scene_of, world_scene
+from lfdfuse.log.scene import Arrow, arrow_scene, arrow_scene_of, encode_arrow_scene, world_scene
 from lfdfuse.log.sensing import (
     decode_detections,
     decode_pose,
@@ -62,6 +62,7 @@ __all__ = [
     "RawMessage",
     "arrow_scene",
     "arrow_scene_of",
+    "encode_arrow_scene",
     "decode_detections",
     "decode_pose",
     "decode_scan",

@@ -155,7 +155,9 @@ class LogWriter:
 
     def write_raw(self, topic: str, t_ns: int, data: bytes) -> None:
         assert self._writer is not None, "LogWriter used outside its with-block"
-        ch = self._channel(topic)
+        ch = self._channels.get(topic)
+        if ch is None:
+            ch = self._channel(topic)
         seq = self._seq[topic] = self._seq[topic] + 1
         if self._messages is not None:
             self._messages.add(ch, t_ns, data, seq)
