@@ -345,17 +345,18 @@ class OpeningSensor:
             return hi - lo > self.params.spin_rad
         # the headings of the path since ``since``: its tail (the odometry never decreases),
         # read back from the newest; their spread is that of the whole tail, whatever the order
-        lo = hi = None
+        low: float | None = None
+        high: float | None = None
         for odo, h in reversed(self._path):
             if odo < since:
                 break
-            if lo is None or h < lo:
-                lo = h
-            if hi is None or h > hi:
-                hi = h
-        if lo is None or hi is None:
-            lo = hi = self._heading
-        return hi - lo > self.params.spin_rad
+            if low is None or h < low:
+                low = h
+            if high is None or h > high:
+                high = h
+        if low is None or high is None:
+            low = high = self._heading  # nothing since: the heading less itself
+        return high - low > self.params.spin_rad
 
 
 def sensed_onsets(
@@ -430,7 +431,7 @@ class PassedCounter:
                 continue
             keep.append((side, odo, held))
         self._pending = keep
-        waiting = [sum(1 for s, _, _ in keep if s == side) for side in (LEFT, RIGHT)]
+        waiting = [sum(1 for s, _, _ in keep if s == side) for side in (LEFT, RIGHT)] if keep else [0, 0]
         self.before = (self.passed[LEFT] + waiting[LEFT], self.passed[RIGHT] + waiting[RIGHT])
         new = [False, False]
         for side in (LEFT, RIGHT):

@@ -139,7 +139,7 @@ class BehaviorState:
                 raise ConfigError(f"unknown behaviour {name!r}")
             self.primitives.append(s.make(name, params))
         #: the fused plan of the last block (see :func:`_fused`) and what it was made for
-        self.plan: tuple[object, ...] | None = None
+        self.plan: tuple[BehaviorParams, object, tuple[str, ...], np.ndarray | None, _Plan] | None = None
 
     def reset(self) -> None:
         for p in self.primitives:
@@ -290,11 +290,12 @@ def _fused(
             obs.target_names,
             id(obs.sonar_angles_rad) if sonar is not None else 0,
         )
-        plan = _PLANS.get(key)
-        if plan is None or (sonar is not None and plan.sonar_angles is not obs.sonar_angles_rad):
+        known = _PLANS.get(key)
+        if known is None or (sonar is not None and known.sonar_angles is not obs.sonar_angles_rad):
             if len(_PLANS) >= 64:
                 _PLANS.clear()
-            plan = _PLANS[key] = _plan(scan, state, sonar is not None)
+            known = _PLANS[key] = _plan(scan, state, sonar is not None)
+        plan = known
         state.plan = (
             params,
             obs.geometry,

@@ -139,7 +139,11 @@ class NetworkRuntime:
             self.progress.after_turn = turned and cues.front_open
             if ended.goal is not None:
                 achieved_now.append(ended.goal)
-        bac = int(outputs.bac[0])
+        app = outputs.applicable
+        if app.shape[0] == 1:  # BehaviorOutputs.bac of the one tick, without its array
+            bac = sum(1 << j for j, a in enumerate(app[0].tolist()) if a)
+        else:
+            bac = int(outputs.bac[0])
         if found is None or self.complete:
             return Decision(None, (), bac, {}, False, np.zeros(2), tuple(achieved_now))
         path, step = found
