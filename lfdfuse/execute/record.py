@@ -9,7 +9,7 @@ row for, or an unidentifiable row).
 
 from __future__ import annotations
 
-import numpy as np
+import operator
 
 from lfdfuse.behaviors import catalogue
 from lfdfuse.log import lfd
@@ -29,6 +29,26 @@ class LfdRecorder:
         self.colors = {n: catalogue.rgb(n) for n in driver.table.behaviors}
         for topic, schema in lfd.EXECUTE_TOPICS.items():
             log.add_topic(topic, schema)
+        #: the last tick's weights (their names in order and the very number objects) and as
+        #: ``/lfd/fused`` rounds them
+        self._names: tuple[str, ...] = ()
+        self._values: tuple[float, ...] = ()
+        self._rounded_weights: dict[str, float] = {}
+
+    def _rounded(self, weights: dict[str, float]) -> dict[str, float]:
+        """``weights`` rounded as :func:`~lfdfuse.log.lfd.encode_fused` rounds them; the last
+        tick's rounding again where the weights are the last tick's: the same names in the same
+        order holding the same number objects (a decision copies its row's dict, not its numbers)."""
+        names, values = tuple(weights), tuple(weights.values())
+        if (
+            names == self._names
+            and len(values) == len(self._values)
+            and all(map(operator.is_, values, self._values))
+        ):
+            return self._rounded_weights
+        self._names, self._values = names, values
+        self._rounded_weights = lfd.rounded_weights(weights)
+        return self._rounded_weights
 
     def record(self, obs: Observation, command: tuple[float, float]) -> None:
         driver = self.driver
@@ -36,7 +56,7 @@ class LfdRecorder:
         if dec is None or out is None:
             return
         names = driver.table.behaviors
-        xy = np.round(out.vectors[0], 6).tolist()  # Python floats: the same numbers as float(vec[j, i])
+        xy = out.vectors[0].round(6).tolist()  # Python floats: the same numbers as float(vec[j, i])
         applicable = out.applicable[0].tolist()
         log = self.log
         log.write_raw(
@@ -61,8 +81,8 @@ class LfdRecorder:
             ),
         )
         fx, fy = dec.fused.tolist()
-        log.write_raw("/lfd/fused", t_ns, lfd.encode_fused(t_ns, fx, fy, dec.weights))
         weights, colors = dec.weights, self.colors
+        log.write_raw("/lfd/fused", t_ns, lfd.encode_fused_rounded(t_ns, fx, fy, self._rounded(weights)))
         arrows = [
             # the behaviour's colour in every figure
             (weights[n] * xy[j][0], weights[n] * xy[j][1], colors[n], 1.5)

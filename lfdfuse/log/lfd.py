@@ -388,12 +388,22 @@ class FusedVector(Codec):
         return cls(timestamp_ns(msg), as_number(msg["x"], "x"), as_number(msg["y"], "y"), weights)
 
 
+def rounded_weights(weights: dict[str, float]) -> dict[str, float]:
+    """The weights as ``/lfd/fused`` carries them: rounded to 1e-4."""
+    return {k: round(v, 4) for k, v in weights.items()}
+
+
 def fused_dict(t_ns: int, x: float, y: float, weights: dict[str, float]) -> dict[str, Any]:
-    return {"timestamp": stamp(t_ns), "x": x, "y": y, "weights": {k: round(v, 4) for k, v in weights.items()}}
+    return {"timestamp": stamp(t_ns), "x": x, "y": y, "weights": rounded_weights(weights)}
 
 
 def encode_fused(t_ns: int, x: float, y: float, weights: dict[str, float]) -> bytes:
     return orjson.dumps(fused_dict(t_ns, x, y, weights))
+
+
+def encode_fused_rounded(t_ns: int, x: float, y: float, rounded: dict[str, float]) -> bytes:
+    """:func:`encode_fused` of weights rounded already (:func:`rounded_weights`)."""
+    return orjson.dumps({"timestamp": stamp(t_ns), "x": x, "y": y, "weights": rounded})
 
 
 def decode_fused(data: bytes) -> FusedVector:
