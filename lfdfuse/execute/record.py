@@ -12,7 +12,7 @@ from __future__ import annotations
 import operator
 
 from lfdfuse.behaviors import catalogue
-from lfdfuse.log import lfd
+from lfdfuse.log import lfd, lfd_tick
 from lfdfuse.log import messages as msg
 from lfdfuse.log.writer import LogWriter
 from lfdfuse.network.stepper import NetworkStepper
@@ -47,7 +47,7 @@ class LfdRecorder:
         ):
             return self._rounded_weights
         self._names, self._values = names, values
-        self._rounded_weights = lfd.rounded_weights(weights)
+        self._rounded_weights = lfd_tick.rounded_weights(weights)
         return self._rounded_weights
 
     def record(self, obs: Observation, command: tuple[float, float]) -> None:
@@ -62,7 +62,7 @@ class LfdRecorder:
         log.write_raw(
             "/lfd/behaviors",
             t_ns,
-            lfd.encode_behavior_lists(t_ns, names, xy, applicable, out.goal_met[0].tolist()),
+            lfd_tick.encode_behavior_lists(t_ns, names, xy, applicable, out.goal_met[0].tolist()),
         )
         log.write_raw(
             "/lfd/bac", t_ns, lfd.encode_bac(t_ns, dec.bac, [n for j, n in enumerate(names) if applicable[j]])
@@ -82,7 +82,7 @@ class LfdRecorder:
         )
         fx, fy = dec.fused.tolist()
         weights, colors = dec.weights, self.colors
-        log.write_raw("/lfd/fused", t_ns, lfd.encode_fused_rounded(t_ns, fx, fy, self._rounded(weights)))
+        log.write_raw("/lfd/fused", t_ns, lfd_tick.encode_fused_rounded(t_ns, fx, fy, self._rounded(weights)))
         arrows = [
             # the behaviour's colour in every figure
             (weights[n] * xy[j][0], weights[n] * xy[j][1], colors[n], 1.5)

@@ -39,6 +39,7 @@ from lfdfuse.log.codec import (
     timestamp_ns,
 )
 from lfdfuse.log.command import DriveCommand
+from lfdfuse.log.lfd_tick import bac_dict, behaviors_dict, encode_behavior_lists, fused_dict, step_dict
 from lfdfuse.log.stamps import stamp
 
 #: channels that ``segment`` adds (a contract)
@@ -145,31 +146,11 @@ class BehaviorRow(Codec):
         return cls(t_ns, names, vectors, np.array(app, dtype=bool), np.array(goal, dtype=bool))
 
 
-def behaviors_dict(
-    t_ns: int, names: Sequence[str], xy: list[list[float]], applicable: list[bool], goal_met: list[bool]
-) -> dict[str, Any]:
-    """:meth:`BehaviorRow.to_dict` of its fields as Python lists (``ndarray.tolist()``)."""
-    return {
-        "timestamp": stamp(t_ns),
-        "behaviors": [
-            {"name": n, "x": xy[j][0], "y": xy[j][1], "applicable": applicable[j], "goal_met": goal_met[j]}
-            for j, n in enumerate(names)
-        ],
-    }
-
-
 def encode_behaviors(
     t_ns: int, names: Sequence[str], vectors: np.ndarray, applicable: np.ndarray, goal_met: np.ndarray
 ) -> bytes:
     """``vectors (K, 2)`` already rounded by the caller (one ``np.round`` over a whole log is faster)."""
     return encode_behavior_lists(t_ns, names, vectors.tolist(), applicable.tolist(), goal_met.tolist())
-
-
-def encode_behavior_lists(
-    t_ns: int, names: Sequence[str], xy: list[list[float]], applicable: list[bool], goal_met: list[bool]
-) -> bytes:
-    """:func:`encode_behaviors` of the arrays as Python lists (a caller that has them already)."""
-    return orjson.dumps(behaviors_dict(t_ns, names, xy, applicable, goal_met))
 
 
 def decode_behaviors(data: bytes) -> BehaviorRow:
@@ -249,10 +230,6 @@ class Bac(Codec):
     def _from_json(cls, msg: dict[str, Any]) -> Bac:
         check_fields(msg, cls.KEYS)
         return cls(timestamp_ns(msg), as_count(msg["bac"], "bac"), as_names(msg["applicable"], "applicable"))
-
-
-def bac_dict(t_ns: int, bac: int, applicable: Sequence[str]) -> dict[str, Any]:
-    return {"timestamp": stamp(t_ns), "bac": bac, "applicable": list(applicable)}
 
 
 def encode_bac(t_ns: int, bac: int, applicable: Sequence[str]) -> bytes:
@@ -340,19 +317,6 @@ class NetworkStep(Codec):
         )
 
 
-def step_dict(
-    t_ns: int, step: str | None, goal: str | None, bac: int, default_weights: bool, achieved: Sequence[str]
-) -> dict[str, Any]:
-    return {
-        "timestamp": stamp(t_ns),
-        "step": step,
-        "goal": goal,
-        "bac": bac,
-        "default_weights": default_weights,
-        "achieved": list(achieved),
-    }
-
-
 def encode_step(
     t_ns: int, *, step: str | None, goal: str | None, bac: int, default_weights: bool, achieved: Sequence[str]
 ) -> bytes:
@@ -388,22 +352,8 @@ class FusedVector(Codec):
         return cls(timestamp_ns(msg), as_number(msg["x"], "x"), as_number(msg["y"], "y"), weights)
 
 
-def rounded_weights(weights: dict[str, float]) -> dict[str, float]:
-    """The weights as ``/lfd/fused`` carries them: rounded to 1e-4."""
-    return {k: round(v, 4) for k, v in weights.items()}
-
-
-def fused_dict(t_ns: int, x: float, y: float, weights: dict[str, float]) -> dict[str, Any]:
-    return {"timestamp": stamp(t_ns), "x": x, "y": y, "weights": rounded_weights(weights)}
-
-
 def encode_fused(t_ns: int, x: float, y: float, weights: dict[str, float]) -> bytes:
     return orjson.dumps(fused_dict(t_ns, x, y, weights))
-
-
-def encode_fused_rounded(t_ns: int, x: float, y: float, rounded: dict[str, float]) -> bytes:
-    """:func:`encode_fused` of weights rounded already (:func:`rounded_weights`)."""
-    return orjson.dumps({"timestamp": stamp(t_ns), "x": x, "y": y, "weights": rounded})
 
 
 def decode_fused(data: bytes) -> FusedVector:

@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse.log import lfd
+from lfdfuse.log import lfd, lfd_tick
 from lfdfuse.log import messages as msg
 from lfdfuse.log.codec import MessageError
 from lfdfuse.log.command import COMMAND_SOURCES, DRIVE_TOPICS, DriveCommand
@@ -382,7 +382,7 @@ def test_the_list_encoders_write_what_the_classes_write(
     goal = np.array(data.draw(st.lists(st.booleans(), min_size=k, max_size=k)), dtype=bool)
     row = lfd.BehaviorRow(t, names, vec, app, goal).encode()
     assert lfd.encode_behaviors(t, names, vec, app, goal) == row
-    assert lfd.encode_behavior_lists(t, names, vec.tolist(), app.tolist(), goal.tolist()) == row
+    assert lfd_tick.encode_behavior_lists(t, names, vec.tolist(), app.tolist(), goal.tolist()) == row
     bac = data.draw(st.integers(0, 2**62))
     assert lfd.encode_bac(t, bac, list(names)) == lfd.Bac(t, bac, names).encode()
     weights = dict(zip(names, data.draw(st.lists(REAL, min_size=k, max_size=k)), strict=True))
