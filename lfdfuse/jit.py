@@ -40,9 +40,24 @@ MODE = "LFDFUSE_KERNELS"
 _numba: dict[str, Any] = {}
 
 
+#: the environment as ``os.environ`` keeps it (its raw values by encoded name), and the name of
+#: :data:`MODE` there: one dict lookup per :func:`compiled_wanted` instead of ``os.environ.get``'s
+#: encode, look-up and decode (a kernel is asked whether it is ready several times a tick)
+_ENVIRON: dict[Any, Any] | None = getattr(os.environ, "_data", None)
+_KEY: Any = os.environ.encodekey(MODE) if hasattr(os.environ, "encodekey") else None
+#: the raw value of :data:`MODE` last read, and what it said
+_seen: list[Any] = [object(), True]
+
+
 def compiled_wanted() -> bool:
-    """True unless ``LFDFUSE_KERNELS=numpy`` asks for the numpy references."""
-    return os.environ.get(MODE, "numba").strip().lower() != "numpy"
+    """True unless ``LFDFUSE_KERNELS=numpy`` asks for the numpy references (read afresh at every
+    call: a change of ``os.environ`` takes effect at once)."""
+    if _ENVIRON is None or _KEY is None:
+        return os.environ.get(MODE, "numba").strip().lower() != "numpy"
+    raw = _ENVIRON.get(_KEY)
+    if raw is not _seen[0]:
+        _seen[0], _seen[1] = raw, os.environ.get(MODE, "numba").strip().lower() != "numpy"
+    return bool(_seen[1])
 
 
 def _first_line(exc: BaseException) -> str:

@@ -66,3 +66,15 @@ def test_nothing_held_runs_as_before() -> None:
     with jit._signals_held():
         pass
     assert {s: signal.getsignal(s) for s in before} == before
+
+
+def test_the_kernel_mode_follows_the_environment_at_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``compiled_wanted`` reads its answer afresh: set, changed and unset between two calls."""
+    monkeypatch.delenv(jit.MODE, raising=False)
+    assert jit.compiled_wanted()
+    for value, wanted in (("numpy", False), (" NumPy ", False), ("numba", True), ("numpy", False)):
+        monkeypatch.setenv(jit.MODE, value)
+        assert jit.compiled_wanted() is wanted
+        assert jit.compiled_wanted() is wanted
+    monkeypatch.delenv(jit.MODE)
+    assert jit.compiled_wanted()

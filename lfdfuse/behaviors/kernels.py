@@ -89,9 +89,34 @@ def _corridor_loop(r: np.ndarray, left: np.ndarray, right: np.ndarray, open_m: f
     return total <= open_m
 
 
+def _held_loop(
+    r: np.ndarray,
+    side: np.ndarray,
+    ahead: np.ndarray,
+    far_m: float,
+    inner: float,
+    outer: float,
+    fraction: float,
+    beam: float,
+) -> tuple[bool, bool, float]:
+    """One scan ``r (B,)`` as :meth:`~lfdfuse.behaviors.openings.OpeningSensor.update` senses it
+    at the held heading, in one call: the open flags (left, right) of :func:`_side_open_loop` over
+    the bearings ``side`` and the way ahead of :func:`_ahead_loop` over the bearings ``ahead``."""
+    r2 = np.empty((1, r.shape[0]))
+    a2 = np.empty((1, side.shape[0]))
+    for j in range(r.shape[0]):
+        r2[0, j] = r[j]
+    for j in range(side.shape[0]):
+        a2[0, j] = side[j]
+    out = np.zeros((1, 2), dtype=np.bool_)
+    _side_open_loop(r2, a2, far_m, inner, outer, fraction, out)
+    return out[0, 0], out[0, 1], _ahead_loop(r, ahead, beam)
+
+
 SIDE_OPEN = kernel(_side_open_loop)
 AHEAD = kernel(_ahead_loop)
 CORRIDOR = kernel(_corridor_loop)
+HELD = kernel(_held_loop, calls=[_side_open_loop, _ahead_loop])
 
 
 #: the kinds of fused primitive a :func:`_pool_loop` op computes (``ops[m, 0]``)

@@ -86,7 +86,7 @@ def ahead_range(
     :func:`ahead_range_reference` is the numpy."""
     if not kernels.AHEAD.ready():
         return ahead_range_reference(ranges_m, geometry, params, offset_rad=offset_rad)
-    a = _ahead_bearings(geometry) if offset_rad == 0.0 else _wrap(geometry.angles - offset_rad)
+    a = ahead_bearings(geometry) if offset_rad == 0.0 else _wrap(geometry.angles - offset_rad)
     return float(kernels.AHEAD(np.asarray(ranges_m, dtype=np.float64), a, params.ahead_beam_rad))
 
 
@@ -95,7 +95,7 @@ def _wrap(a: np.ndarray) -> np.ndarray:
 
 
 @lru_cache(maxsize=16)
-def _ahead_bearings(geometry: ScanGeometry) -> np.ndarray:
+def ahead_bearings(geometry: ScanGeometry) -> np.ndarray:
     """The bearings :func:`ahead_range_reference` looks along with no offset (``angles − 0``, wrapped)."""
     a = _wrap(geometry.angles - 0.0)
     a.flags.writeable = False
@@ -206,7 +206,7 @@ class OpeningTracker:
         self._run = [0, 0]  # ticks the flag has disagreed with ``inside``
         self._turns: deque[float] = deque(maxlen=params.steady_ticks)
 
-    def update(self, open_now: np.ndarray, turn_rad: float = 0.0) -> tuple[bool, bool]:
+    def update(self, open_now: np.ndarray | tuple[bool, bool], turn_rad: float = 0.0) -> tuple[bool, bool]:
         """Onset (left, right) at this tick from its open flags ``(2,)`` and this tick's
         heading change (rad); while turning, the sides read as closed."""
         self._turns.append(turn_rad)
@@ -250,31 +250,54 @@ class OpeningSensor:
             np.abs(a + math.pi / 2) <= params.corridor_beam_rad,
         )
         self._abeam_at = (np.flatnonzero(self._abeam[0]), np.flatnonzero(self._abeam[1]))
+        # what every tick of the compiled sensing reads of the layout, looked up once
+        self._bear = _bearings(geometry)
+        self._side0, self._ahead0 = _side_bearings(geometry), ahead_bearings(geometry)
+        self._one_wrap = _wrapped(geometry)
+        self._far_m = min(params.open_m, geometry.max_range_m)
         #: the sectors are held now (the robot was in a corridor ``lag_m`` ago)
         self.holding = False
         #: how far the robot has turned (rad, + = left) from the heading the sectors are held at
         self.held_turn_rad = 0.0
         #: how far the way ahead, along the held heading, is open (m) at this tick
         self.ahead_m = math.inf
+        #: every distance so far ≥ 0 and the heading a number: the odometry along the deques
+        #: never decreases (their scans may stop where it passes a bound), and the headings'
+        #: spread is the same in any order
+        self._ordered = True
 
     def update(self, ranges_m: np.ndarray, step_m: float, turn_rad: float) -> tuple[bool, bool]:
         """Onsets at this tick from its scan ``(B,)`` and odometry increment (m, rad)."""
         self._odo_m += step_m
         self._heading += turn_rad
+        if not (step_m >= 0.0 and self._heading == self._heading):
+            self._ordered = False
         self._path.append((self._odo_m, self._heading))
         while len(self._path) > 1 and self._path[1][0] <= self._odo_m - self.params.lag_m:
             self._path.popleft()
         ranges = np.asarray(ranges_m, dtype=np.float64)
-        compiled = kernels.SIDE_OPEN.ready() and kernels.CORRIDOR.ready() and kernels.AHEAD.ready()
+        compiled = kernels.HELD.ready() and kernels.CORRIDOR.ready()
         self._corridor.append((self._odo_m, self._in_corridor(ranges, compiled)))
         back = self._odo_m - self.params.lag_m - self.params.corridor_back_m
         while len(self._corridor) > 1 and self._corridor[1][0] <= back:
             self._corridor.popleft()
         ahead = self._odo_m - self.params.lag_m + self.params.corridor_ahead_m
-        self.holding = any(c for odo, c in self._corridor if odo <= ahead)
+        if self._ordered:
+            # any corridor tick up to ``ahead``: the odometry never decreases along the deque,
+            # so those ticks are its head, and the first corridor tick there decides
+            self.holding = False
+            for odo, c in self._corridor:
+                if odo > ahead:
+                    break
+                if c:
+                    self.holding = True
+                    break
+        else:
+            self.holding = any(c for odo, c in self._corridor if odo <= ahead)
         held = self._path[0][1] if self.holding else self._heading
         held_turn, self._held = held - self._held, held
         self.held_turn_rad = self._heading - held
+        flags: np.ndarray | tuple[bool, bool]
         if compiled:
             flags, self.ahead_m = self._compiled(ranges, held - self._heading)
         else:
@@ -285,24 +308,23 @@ class OpeningSensor:
                 ranges, self.geometry, self.params, offset_rad=held - self._heading
             )
         if self.holding and self._spinning():
-            flags = np.zeros(2, dtype=bool)
+            flags = (False, False)
         return self.tracker.update(flags, held_turn)
 
-    def _compiled(self, ranges: np.ndarray, offset: float) -> tuple[np.ndarray, float]:
-        """The open flags and the way ahead of :meth:`update` by the compiled loops: the same
-        bearings as the references wrap (once, where the layout's are already wrapped)."""
+    def _compiled(self, ranges: np.ndarray, offset: float) -> tuple[tuple[bool, bool], float]:
+        """The open flags and the way ahead of :meth:`update` by the compiled loops (one call of
+        :data:`~lfdfuse.behaviors.kernels.HELD`): the same bearings as the references wrap
+        (once, where the layout's are already wrapped)."""
         g, p = self.geometry, self.params
         if offset == 0.0:
-            side, ahead = _side_bearings(g), _ahead_bearings(g)
+            side, ahead = self._side0, self._ahead0
         else:
-            side = _wrap(_bearings(g) - offset)
-            ahead = side if _wrapped(g) else _wrap(g.angles - offset)
-        flags = np.zeros((1, 2), dtype=bool)
-        r = ranges[None, :]
-        kernels.SIDE_OPEN(
-            r, side[None, :], min(p.open_m, g.max_range_m), p.inner_rad, p.outer_rad, p.fraction, flags
+            side = _wrap(self._bear - offset)
+            ahead = side if self._one_wrap else _wrap(g.angles - offset)
+        left, right, ahead_m = kernels.HELD(
+            ranges, side, ahead, self._far_m, p.inner_rad, p.outer_rad, p.fraction, p.ahead_beam_rad
         )
-        return flags[0], float(kernels.AHEAD(ranges, ahead, p.ahead_beam_rad))
+        return (bool(left), bool(right)), float(ahead_m)
 
     def _in_corridor(self, ranges: np.ndarray, compiled: bool = False) -> bool:
         """Walls abeam on both sides, at most ``open_m`` apart (a beam with no return is far)."""
@@ -317,9 +339,24 @@ class OpeningSensor:
     def _spinning(self) -> bool:
         """Turned more than ``spin_rad`` over the last ``spin_m`` of travel."""
         since = self._odo_m - self.params.spin_m
-        lo = min((h for odo, h in self._path if odo >= since), default=self._heading)
-        hi = max((h for odo, h in self._path if odo >= since), default=self._heading)
-        return hi - lo > self.params.spin_rad
+        if not self._ordered:
+            lo = min((h for odo, h in self._path if odo >= since), default=self._heading)
+            hi = max((h for odo, h in self._path if odo >= since), default=self._heading)
+            return hi - lo > self.params.spin_rad
+        # the headings of the path since ``since``: its tail (the odometry never decreases),
+        # read back from the newest; their spread is that of the whole tail, whatever the order
+        low: float | None = None
+        high: float | None = None
+        for odo, h in reversed(self._path):
+            if odo < since:
+                break
+            if low is None or h < low:
+                low = h
+            if high is None or h > high:
+                high = h
+        if low is None or high is None:
+            low = high = self._heading  # nothing since: the heading less itself
+        return high - low > self.params.spin_rad
 
 
 def sensed_onsets(
@@ -394,7 +431,7 @@ class PassedCounter:
                 continue
             keep.append((side, odo, held))
         self._pending = keep
-        waiting = [sum(1 for s, _, _ in keep if s == side) for side in (LEFT, RIGHT)]
+        waiting = [sum(1 for s, _, _ in keep if s == side) for side in (LEFT, RIGHT)] if keep else [0, 0]
         self.before = (self.passed[LEFT] + waiting[LEFT], self.passed[RIGHT] + waiting[RIGHT])
         new = [False, False]
         for side in (LEFT, RIGHT):

@@ -12,6 +12,7 @@ disc, never clipped per component); each primitive's module says what its length
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -137,6 +138,8 @@ class BehaviorState:
             if s is None:
                 raise ConfigError(f"unknown behaviour {name!r}")
             self.primitives.append(s.make(name, params))
+        #: the fused plan of the last block (see :func:`_fused`) and what it was made for
+        self.plan: tuple[BehaviorParams, object, tuple[str, ...], np.ndarray | None, _Plan] | None = None
 
     def reset(self) -> None:
         for p in self.primitives:
@@ -156,7 +159,9 @@ def compute(
     """
     if state is None:
         state = BehaviorState(names, params)
-    elif state.names != tuple(names) or state.params != params:
+    elif (state.names is not names and state.names != tuple(names)) or (
+        state.params is not params and state.params != params
+    ):
         raise ConfigError("the behaviour state was made for another behaviour set or other parameters")
     scan = Scan(obs, params)
     n, k = scan.n, len(state.names)
@@ -199,6 +204,7 @@ class _Plan:
     attract_cols: list[int]
     attract_targets: list[int]
     done: frozenset[int]
+    own: np.ndarray  # the layout's own beams (``Scan.own``)
 
 
 def _plan(scan: Scan, state: BehaviorState, sonar: bool) -> _Plan:
@@ -244,6 +250,7 @@ def _plan(scan: Scan, state: BehaviorState, sonar: bool) -> _Plan:
         cols,
         targets,
         frozenset([c for _, _, c in ops] + cols),
+        scan.own,
     )
 
 
@@ -264,23 +271,43 @@ def _fused(
     sonar = obs.sonar_m if obs.sonar_angles_rad is not None else None
     if scan.r.dtype != np.float64 or (sonar is not None and sonar.dtype != np.float64):
         return frozenset()
-    key = (
-        state.names,
-        params,
-        obs.geometry,
-        obs.target_names,
-        id(obs.sonar_angles_rad) if sonar is not None else 0,
-    )
-    plan = _PLANS.get(key)
-    if plan is None or (sonar is not None and plan.sonar_angles is not obs.sonar_angles_rad):
-        if len(_PLANS) >= 64:
-            _PLANS.clear()
-        plan = _PLANS[key] = _plan(scan, state, sonar is not None)
+    # the plan of the state's last block, when this block has the same layout, targets and
+    # sonars (the same objects: a live run's every tick); else looked up by value
+    last = state.plan
+    if (
+        last is not None
+        and last[0] is params
+        and last[1] is obs.geometry
+        and last[2] is obs.target_names
+        and last[3] is (obs.sonar_angles_rad if sonar is not None else None)
+    ):
+        plan = last[4]
+    else:
+        key = (
+            state.names,
+            params,
+            obs.geometry,
+            obs.target_names,
+            id(obs.sonar_angles_rad) if sonar is not None else 0,
+        )
+        known = _PLANS.get(key)
+        if known is None or (sonar is not None and known.sonar_angles is not obs.sonar_angles_rad):
+            if len(_PLANS) >= 64:
+                _PLANS.clear()
+            known = _PLANS[key] = _plan(scan, state, sonar is not None)
+        plan = known
+        state.plan = (
+            params,
+            obs.geometry,
+            obs.target_names,
+            obs.sonar_angles_rad if sonar is not None else None,
+            plan,
+        )
     if len(plan.ops):
         thr = params.sonar_threshold_m
         kernels.POOL(
             np.ascontiguousarray(scan.r),
-            scan.own,
+            plan.own,
             obs.geometry.max_range_m,
             params.d_max_m,
             _NO_SONAR if sonar is None else np.ascontiguousarray(sonar),
@@ -293,7 +320,18 @@ def _fused(
             app,
         )
     cols = plan.attract_cols
-    if cols:
+    if cols and scan.n == 1:
+        # one scan (a live tick): the targets seen, one by one, the same numbers (numpy's sine
+        # and cosine of each bearing); a target not seen leaves its column zero, as below
+        bearing, rng = obs.target_bearing_rad[0].tolist(), obs.target_range_m[0].tolist()
+        for col, j in zip(cols, plan.attract_targets, strict=True):
+            b, tr = bearing[j], rng[j]
+            if math.isfinite(b) and math.isfinite(tr):
+                vec[0, col, 0] = np.cos(b)
+                vec[0, col, 1] = np.sin(b)
+                app[0, col] = True
+                goal[0, col] = tr <= params.reach_m
+    elif cols:
         js = plan.attract_targets
         b, tr = obs.target_bearing_rad[:, js], obs.target_range_m[:, js]
         a = np.isfinite(b) & np.isfinite(tr)

@@ -35,6 +35,19 @@ def heading_to_command(heading_rad: np.ndarray, p: DriveParams) -> tuple[np.ndar
     return v, omega
 
 
+def heading_command(heading_rad: float, p: DriveParams) -> tuple[float, float]:
+    """:func:`heading_to_command` of one heading, as Python floats: the same numbers (numpy's
+    sine, cosine and arc tangent, the clip and the floor as comparisons) without the array work."""
+    th = float(np.arctan2(np.sin(heading_rad), np.cos(heading_rad)))
+    omega = p.k_turn * th
+    if omega < -p.omega_max_rps:
+        omega = -p.omega_max_rps
+    elif omega > p.omega_max_rps:
+        omega = p.omega_max_rps
+    c = float(np.cos(th))
+    return p.v_max_mps * (c if c > 0.0 or c != c else 0.0), omega
+
+
 def vector_to_command(vx: np.ndarray, vy: np.ndarray, p: DriveParams) -> tuple[np.ndarray, np.ndarray]:
     """Commands ``(v, ω)`` for robot-frame vectors; a zero vector gives a stop."""
     vx = np.asarray(vx, dtype=np.float64)

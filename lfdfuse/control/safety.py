@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lfdfuse.jit import kernel
+
 
 @dataclass(frozen=True)
 class SafetyParams:
@@ -21,10 +23,50 @@ class SafetyParams:
     step_deg: float = 5.0
 
 
+def _blocked_loop(
+    r: np.ndarray, cos_d: np.ndarray, sin_d: np.ndarray, lookahead: float, halfwidth: float
+) -> bool:
+    """Whether a return lies in the strip along the heading whose beam offsets have the cosines
+    ``cos_d`` and sines ``sin_d``: the first test of :func:`free_heading_reference`, beam by beam."""
+    for j in range(r.shape[0]):
+        x = r[j]
+        r1 = x if np.isfinite(x) and x > 0 else 0.0
+        along = r1 * cos_d[j]
+        if along > 0 and along < lookahead and abs(r1 * sin_d[j]) < halfwidth:
+            return True
+    return False
+
+
+#: the common case of :func:`free_heading` (the wanted heading free) in one compiled pass
+BLOCKED = kernel(_blocked_loop)
+
+
 def free_heading(
     rel_rad: float, ranges_m: np.ndarray, angles_rad: np.ndarray, p: SafetyParams = SafetyParams()
 ) -> float:
-    """The free robot-frame heading nearest ``rel_rad`` (see the module docstring)."""
+    """The free robot-frame heading nearest ``rel_rad`` (see the module docstring).
+
+    The wanted heading's test runs compiled where it can (:data:`BLOCKED`: the cosines and sines
+    numpy's, the same products and comparisons); the rest, and every test without numba, is
+    :func:`free_heading_reference`."""
+    if (
+        type(ranges_m) is np.ndarray
+        and type(angles_rad) is np.ndarray
+        and ranges_m.dtype == np.float64
+        and angles_rad.dtype == np.float64
+        and ranges_m.shape == angles_rad.shape
+        and BLOCKED.ready()
+    ):
+        d1 = angles_rad - rel_rad
+        if not BLOCKED(ranges_m, np.cos(d1), np.sin(d1), p.lookahead_m, p.halfwidth_m):
+            return rel_rad
+    return free_heading_reference(rel_rad, ranges_m, angles_rad, p)
+
+
+def free_heading_reference(
+    rel_rad: float, ranges_m: np.ndarray, angles_rad: np.ndarray, p: SafetyParams = SafetyParams()
+) -> float:
+    """:func:`free_heading` in numpy: the reference."""
     # no return (inf, NaN, 0) counts as range 0 here, which no strip test accepts (along > 0)
     r1 = np.where(np.isfinite(ranges_m) & (ranges_m > 0), ranges_m, 0.0)
     d1 = angles_rad - rel_rad

@@ -9,13 +9,12 @@ row for, or an unidentifiable row).
 
 from __future__ import annotations
 
-import numpy as np
+import operator
 
 from lfdfuse.behaviors import catalogue
-from lfdfuse.log import lfd
+from lfdfuse.log import lfd, lfd_tick
 from lfdfuse.log import messages as msg
 from lfdfuse.log.writer import LogWriter
-from lfdfuse.network.runtime import step_name_of
 from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.robot.readings import Observation
 
@@ -30,49 +29,69 @@ class LfdRecorder:
         self.colors = {n: catalogue.rgb(n) for n in driver.table.behaviors}
         for topic, schema in lfd.EXECUTE_TOPICS.items():
             log.add_topic(topic, schema)
+        #: the last tick's weights (their names in order and the very number objects) and as
+        #: ``/lfd/fused`` rounds them
+        self._names: tuple[str, ...] = ()
+        self._values: tuple[float, ...] = ()
+        self._rounded_weights: dict[str, float] = {}
+
+    def _rounded(self, weights: dict[str, float]) -> dict[str, float]:
+        """``weights`` rounded as :func:`~lfdfuse.log.lfd.encode_fused` rounds them; the last
+        tick's rounding again where the weights are the last tick's: the same names in the same
+        order holding the same number objects (a decision copies its row's dict, not its numbers)."""
+        names, values = tuple(weights), tuple(weights.values())
+        if (
+            names == self._names
+            and len(values) == len(self._values)
+            and all(map(operator.is_, values, self._values))
+        ):
+            return self._rounded_weights
+        self._names, self._values = names, values
+        self._rounded_weights = lfd_tick.rounded_weights(weights)
+        return self._rounded_weights
 
     def record(self, obs: Observation, command: tuple[float, float]) -> None:
-        dec, out, t_ns = self.driver.last, self.driver.last_outputs, obs.t_ns
+        driver = self.driver
+        dec, out, t_ns = driver.last, driver.last_outputs, obs.t_ns
         if dec is None or out is None:
             return
-        names = self.driver.table.behaviors
-        vec = np.round(out.vectors[0], 6)
-        app = out.applicable[0]
+        names = driver.table.behaviors
+        xy = out.vectors[0].round(6).tolist()  # Python floats: the same numbers as float(vec[j, i])
+        applicable = out.applicable[0].tolist()
         log = self.log
-        log.write_raw("/lfd/behaviors", t_ns, lfd.encode_behaviors(t_ns, names, vec, app, out.goal_met[0]))
-        applicable = app.tolist()
+        log.write_raw(
+            "/lfd/behaviors",
+            t_ns,
+            lfd_tick.encode_behavior_lists(t_ns, names, xy, applicable, out.goal_met[0].tolist()),
+        )
         log.write_raw(
             "/lfd/bac", t_ns, lfd.encode_bac(t_ns, dec.bac, [n for j, n in enumerate(names) if applicable[j]])
         )
+        step = dec.step
         log.write_raw(
             "/lfd/step",
             t_ns,
             lfd.encode_step(
                 t_ns,
-                step=step_name_of(dec.path, self.driver.table) if dec.step is not None else None,
-                goal=dec.step.goal if dec.step is not None else None,
+                step=driver.step_name(dec.path) if step is not None else None,
+                goal=step.goal if step is not None else None,
                 bac=dec.bac,
                 default_weights=dec.unseen,
-                achieved=[g for g, _ in self.driver.reached],
+                achieved=[g for g, _ in driver.reached],
             ),
         )
-        log.write_raw(
-            "/lfd/fused", t_ns, lfd.encode_fused(t_ns, float(dec.fused[0]), float(dec.fused[1]), dec.weights)
-        )
-        xy = vec.tolist()  # Python floats: the same numbers as float(vec[j, i])
+        fx, fy = dec.fused.tolist()
+        weights, colors = dec.weights, self.colors
+        log.write_raw("/lfd/fused", t_ns, lfd_tick.encode_fused_rounded(t_ns, fx, fy, self._rounded(weights)))
         arrows = [
-            msg.Arrow(
-                dec.weights[n] * xy[j][0],
-                dec.weights[n] * xy[j][1],
-                self.colors[n],  # the behaviour's colour in every figure
-                1.5,
-            )
+            # the behaviour's colour in every figure
+            (weights[n] * xy[j][0], weights[n] * xy[j][1], colors[n], 1.5)
             for j, n in enumerate(names)
-            if applicable[j] and n in dec.weights
+            if applicable[j] and n in weights
         ]
-        arrows.append(msg.Arrow(float(dec.fused[0]), float(dec.fused[1]), (1.0, 1.0, 1.0), 1.5))
-        log.write("/lfd/overlay", t_ns, msg.arrow_scene(t_ns, "fusion", arrows))
-        ask = self.driver.help_now
+        arrows.append((fx, fy, (1.0, 1.0, 1.0), 1.5))
+        log.write_raw("/lfd/overlay", t_ns, msg.encode_arrow_scene(t_ns, "fusion", arrows))
+        ask = driver.help_now
         if ask is not None:
             log.write_raw(
                 "/lfd/network", t_ns, lfd.encode_help(t_ns, step=ask.step, bac=ask.bac, why=ask.why)

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar, Literal, get_args
 
 import numpy as np
+import orjson
 
 from lfdfuse.log.codec import (
     Codec,
@@ -38,6 +39,7 @@ from lfdfuse.log.codec import (
     timestamp_ns,
 )
 from lfdfuse.log.command import DriveCommand
+from lfdfuse.log.lfd_tick import bac_dict, behaviors_dict, encode_behavior_lists, fused_dict, step_dict
 from lfdfuse.log.stamps import stamp
 
 #: channels that ``segment`` adds (a contract)
@@ -103,16 +105,9 @@ class BehaviorRow(Codec):
     goal_met: np.ndarray
 
     def to_dict(self) -> dict[str, Any]:
-        vec = self.vectors.tolist()
-        app = self.applicable.tolist()
-        goal = self.goal_met.tolist()
-        return {
-            "timestamp": stamp(self.t_ns),
-            "behaviors": [
-                {"name": n, "x": vec[j][0], "y": vec[j][1], "applicable": app[j], "goal_met": goal[j]}
-                for j, n in enumerate(self.names)
-            ],
-        }
+        return behaviors_dict(
+            self.t_ns, self.names, self.vectors.tolist(), self.applicable.tolist(), self.goal_met.tolist()
+        )
 
     @classmethod
     def from_dict(cls, msg: dict[str, Any]) -> BehaviorRow:
@@ -155,7 +150,7 @@ def encode_behaviors(
     t_ns: int, names: Sequence[str], vectors: np.ndarray, applicable: np.ndarray, goal_met: np.ndarray
 ) -> bytes:
     """``vectors (K, 2)`` already rounded by the caller (one ``np.round`` over a whole log is faster)."""
-    return BehaviorRow(t_ns, tuple(names), vectors, applicable, goal_met).encode()
+    return encode_behavior_lists(t_ns, names, vectors.tolist(), applicable.tolist(), goal_met.tolist())
 
 
 def decode_behaviors(data: bytes) -> BehaviorRow:
@@ -229,7 +224,7 @@ class Bac(Codec):
     applicable: tuple[str, ...]
 
     def to_dict(self) -> dict[str, Any]:
-        return {"timestamp": stamp(self.t_ns), "bac": self.bac, "applicable": list(self.applicable)}
+        return bac_dict(self.t_ns, self.bac, self.applicable)
 
     @classmethod
     def _from_json(cls, msg: dict[str, Any]) -> Bac:
@@ -238,7 +233,7 @@ class Bac(Codec):
 
 
 def encode_bac(t_ns: int, bac: int, applicable: Sequence[str]) -> bytes:
-    return Bac(t_ns, bac, tuple(applicable)).encode()
+    return orjson.dumps(bac_dict(t_ns, bac, applicable))
 
 
 def decode_bac(data: bytes) -> Bac:
@@ -307,14 +302,7 @@ class NetworkStep(Codec):
     achieved: tuple[str, ...]
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "timestamp": stamp(self.t_ns),
-            "step": self.step,
-            "goal": self.goal,
-            "bac": self.bac,
-            "default_weights": self.default_weights,
-            "achieved": list(self.achieved),
-        }
+        return step_dict(self.t_ns, self.step, self.goal, self.bac, self.default_weights, self.achieved)
 
     @classmethod
     def _from_json(cls, msg: dict[str, Any]) -> NetworkStep:
@@ -332,7 +320,7 @@ class NetworkStep(Codec):
 def encode_step(
     t_ns: int, *, step: str | None, goal: str | None, bac: int, default_weights: bool, achieved: Sequence[str]
 ) -> bytes:
-    return NetworkStep(t_ns, step, goal, bac, default_weights, tuple(achieved)).encode()
+    return orjson.dumps(step_dict(t_ns, step, goal, bac, default_weights, achieved))
 
 
 @dataclass(frozen=True)
@@ -350,12 +338,7 @@ class FusedVector(Codec):
     weights: dict[str, float]
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "timestamp": stamp(self.t_ns),
-            "x": self.x,
-            "y": self.y,
-            "weights": {k: round(v, 4) for k, v in self.weights.items()},
-        }
+        return fused_dict(self.t_ns, self.x, self.y, self.weights)
 
     @classmethod
     def _from_json(cls, msg: dict[str, Any]) -> FusedVector:
@@ -370,7 +353,7 @@ class FusedVector(Codec):
 
 
 def encode_fused(t_ns: int, x: float, y: float, weights: dict[str, float]) -> bytes:
-    return FusedVector(t_ns, x, y, weights).encode()
+    return orjson.dumps(fused_dict(t_ns, x, y, weights))
 
 
 def decode_fused(data: bytes) -> FusedVector:

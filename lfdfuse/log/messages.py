@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from lfdfuse.log.scene import Arrow, arrow_scene, world_scene
+from lfdfuse.log.scene import Arrow, arrow_scene, arrow_scene_of, encode_arrow_scene, world_scene
 from lfdfuse.log.sensing import (
     decode_detections,
     decode_pose,
@@ -61,6 +61,8 @@ __all__ = [
     "Arrow",
     "RawMessage",
     "arrow_scene",
+    "arrow_scene_of",
+    "encode_arrow_scene",
     "decode_detections",
     "decode_pose",
     "decode_scan",

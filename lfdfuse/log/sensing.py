@@ -25,7 +25,8 @@ def laser_scan(
         "pose": IDENTITY_POSE,
         "start_angle": geom.start_rad,
         "end_angle": geom.end_rad,
-        "ranges": np.round(ranges_m, 3).tolist(),
+        # ndarray.round is what np.round calls (without its dispatch)
+        "ranges": (ranges_m.round(3) if type(ranges_m) is np.ndarray else np.round(ranges_m, 3)).tolist(),
         "intensities": [],
     }
 

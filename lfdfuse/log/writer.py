@@ -56,18 +56,17 @@ class _Messages:
         self, channel_id: int, t_ns: int, data: bytes, sequence: int, publish_ns: int | None = None
     ) -> None:
         stats, chunk = self.stats, self.chunk
-        if stats.message_count == 0:
+        # the min and max of the times so far, as comparisons (integers: the same numbers)
+        if stats.message_count == 0 or t_ns < stats.message_start_time:
             stats.message_start_time = t_ns
-        else:
-            stats.message_start_time = min(t_ns, stats.message_start_time)
-        stats.message_end_time = max(t_ns, stats.message_end_time)
+        if t_ns > stats.message_end_time:
+            stats.message_end_time = t_ns
         stats.channel_message_counts[channel_id] += 1
         stats.message_count += 1
-        if chunk.num_messages == 0:
+        if chunk.num_messages == 0 or t_ns < chunk.message_start_time:
             chunk.message_start_time = t_ns
-        else:
-            chunk.message_start_time = min(chunk.message_start_time, t_ns)
-        chunk.message_end_time = max(chunk.message_end_time, t_ns)
+        if t_ns > chunk.message_end_time:
+            chunk.message_end_time = t_ns
         buffer = chunk.record_writer._buffer
         index = chunk.message_indices.get(channel_id)
         if index is None:
@@ -156,7 +155,9 @@ class LogWriter:
 
     def write_raw(self, topic: str, t_ns: int, data: bytes) -> None:
         assert self._writer is not None, "LogWriter used outside its with-block"
-        ch = self._channel(topic)
+        ch = self._channels.get(topic)
+        if ch is None:
+            ch = self._channel(topic)
         seq = self._seq[topic] = self._seq[topic] + 1
         if self._messages is not None:
             self._messages.add(ch, t_ns, data, seq)

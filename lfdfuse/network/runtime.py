@@ -59,12 +59,23 @@ class NetworkRuntime:
         self.table = table
         self.achieved: set[Path] = set()
         self._has_goal = bool(table.goals())
+        #: each behaviour's column in the outputs (the table's order)
+        self._column = {name: i for i, name in enumerate(table.behaviors)}
+        #: :meth:`active` and :attr:`complete` as of the number of paths achieved then (goals
+        #: are only ever added: the same number, the same set)
+        self._active_at: tuple[int, tuple[Path, Step] | None] | None = None
+        self._complete_at: tuple[int, bool] | None = None
         #: what the active step has sensed since it began (its landmark decides from this)
         self.progress = Progress.fresh(0.0, _lag_of(self.active()))
 
     def active(self) -> tuple[Path, Step] | None:
         """The active fusion step, depth first; None when every goal is achieved."""
-        return self._active(self.table.network, ())
+        cached = self._active_at
+        if cached is not None and cached[0] == len(self.achieved):
+            return cached[1]
+        found = self._active(self.table.network, ())
+        self._active_at = (len(self.achieved), found)  # after: a finished subnetwork adds its node
+        return found
 
     def _active(self, net: Network, prefix: Path) -> tuple[Path, Step] | None:
         for i, step in enumerate(net.steps):
@@ -86,7 +97,12 @@ class NetworkRuntime:
         if not self._has_goal:
             return False
         found = self.active()
-        return found is None or not self._goal_ahead(self.table.network, ())
+        cached = self._complete_at
+        if cached is not None and cached[0] == len(self.achieved):
+            return cached[1]
+        done = found is None or not self._goal_ahead(self.table.network, ())
+        self._complete_at = (len(self.achieved), done)
+        return done
 
     def _goal_ahead(self, net: Network, prefix: Path) -> bool:
         """Whether an unachieved step with a goal remains."""
@@ -123,17 +139,22 @@ class NetworkRuntime:
             self.progress.after_turn = turned and cues.front_open
             if ended.goal is not None:
                 achieved_now.append(ended.goal)
-        bac = int(outputs.bac[0])
+        app = outputs.applicable
+        if app.shape[0] == 1:  # BehaviorOutputs.bac of the one tick, without its array
+            bac = sum(1 << j for j, a in enumerate(app[0].tolist()) if a)
+        else:
+            bac = int(outputs.bac[0])
         if found is None or self.complete:
             return Decision(None, (), bac, {}, False, np.zeros(2), tuple(achieved_now))
         path, step = found
         row = step.row(bac)
         fallback = step.default_weights if step.default_weights is not None else self.table.default_weights
         weights = row.weights if row is not None else fallback
-        fused = self.fuse(outputs, weights)
-        if row is not None and float(np.hypot(*fused)) <= 1e-9:
-            fused = self.fuse(outputs, fallback)
-        fused = self._steer(fused, step, cues)
+        vec = outputs.vectors[0].tolist()
+        x, y = self._fuse(vec, weights)
+        if row is not None and float(np.hypot(x, y)) <= 1e-9:
+            x, y = self._fuse(vec, fallback)
+        fused = self._steer(np.array([x, y]), step, cues)
         return Decision(step, path, bac, dict(weights), row is None, fused, tuple(achieved_now))
 
     def _steer(self, fused: np.ndarray, step: Step, cues: Cues) -> np.ndarray:
@@ -190,14 +211,18 @@ class NetworkRuntime:
     def fuse(self, outputs: BehaviorOutputs, weights: dict[str, float]) -> np.ndarray:
         """``Σ w·v`` over the weighted behaviours (in Python floats: the same sums, in order,
         without a numpy call per behaviour)."""
-        names = self.table.behaviors
-        vec = outputs.vectors[0].tolist()
+        x, y = self._fuse(outputs.vectors[0].tolist(), weights)
+        return np.array([x, y])
+
+    def _fuse(self, vec: list[list[float]], weights: dict[str, float]) -> tuple[float, float]:
+        """:meth:`fuse` of the output vectors ``vec (K, 2)`` as Python lists."""
+        column = self._column
         x = y = 0.0
         for name, w in weights.items():
-            vx, vy = vec[names.index(name)]
+            vx, vy = vec[column[name]]
             x += w * vx
             y += w * vy
-        return np.array([x, y])
+        return x, y
 
 
 def _lag_of(found: tuple[Path, Step] | None) -> float | None:

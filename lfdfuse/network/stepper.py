@@ -19,10 +19,11 @@ from typing import Any
 
 import numpy as np
 
-from lfdfuse.behaviors.openings import OpeningSensor, ahead_range
+from lfdfuse.behaviors import kernels
+from lfdfuse.behaviors.openings import OpeningSensor, ahead_bearings, ahead_range
 from lfdfuse.behaviors.primitives import BehaviorParams, BehaviorState, Observations, compute
 from lfdfuse.behaviors.spec import attract_target
-from lfdfuse.control.command import heading_to_command
+from lfdfuse.control.command import heading_command
 from lfdfuse.control.safety import SafetyParams, free_heading
 from lfdfuse.errors import ConfigError
 from lfdfuse.log.lfd import HelpReason
@@ -160,6 +161,12 @@ class NetworkStepper:
             for lag in landmark_lags(table)
         ]
         self._odom: tuple[float, float, float] | None = None
+        # what every tick reads of the layout and the targets, looked up once
+        self._ahead0 = ahead_bearings(self.geometry)
+        self._target_names = tuple(self.targets)
+        self._column = {name: i for i, name in enumerate(self._target_names)}
+        self._no_targets = np.full((1, len(self.targets)), np.nan)
+        self._step_names: dict[tuple[int, ...], str] = {}
         #: every request for help, in order (one when a condition begins, not every tick it lasts)
         self.help: list[HelpRequest] = []
         #: the request raised at the last tick (None: no new one), and the one standing now
@@ -184,7 +191,12 @@ class NetworkStepper:
         self._odom = (p.x, p.y, p.theta)
         ranges = observation.reading.ranges_m
         params = self.openings.params
-        front_open = ahead_range(ranges, self.geometry, params) >= params.ahead_open_m
+        if kernels.AHEAD.ready() and type(ranges) is np.ndarray and ranges.dtype == np.float64:
+            # ahead_range with no offset, its bearings looked up once
+            ahead = float(kernels.AHEAD(ranges, self._ahead0, params.ahead_beam_rad))
+        else:
+            ahead = ahead_range(ranges, self.geometry, params)
+        front_open = ahead >= params.ahead_open_m
 
         def sensed(sensor: OpeningSensor, lagged: tuple[tuple[float, Cues], ...] = ()) -> Cues:
             left, right = sensor.update(ranges, step_m, turn)
@@ -204,26 +216,51 @@ class NetworkStepper:
         if why is None:
             self.asking = None
             return
-        step = step_name_of(dec.path, self.table)
+        step = self.step_name(dec.path)
         a = self.asking
         if a is None or (a.step, a.bac, a.why) != (step, dec.bac, why):
             self.asking = self.help_now = HelpRequest(t_ns, step, dec.bac, why)
             self.help.append(self.asking)
 
+    def step_name(self, path: tuple[int, ...]) -> str:
+        """:func:`~lfdfuse.network.runtime.step_name_of` the table's step at ``path`` (once per path)."""
+        name = self._step_names.get(path)
+        if name is None:
+            name = self._step_names[path] = step_name_of(path, self.table)
+        return name
+
+    def _observations(self, observation: Observation) -> Observations:
+        """This tick's :class:`Observations` (N = 1): what ``Observations.from_detections`` makes
+        of it, the target columns looked up once."""
+        reading = observation.reading
+        bearing, rng = self._no_targets.copy(), self._no_targets.copy()
+        for d in reading.detections:
+            j = self._column.get(d.name)
+            if j is not None:
+                bearing[0, j], rng[0, j] = d.bearing_rad, d.range_m
+        ranges = reading.ranges_m[None, :]
+        sonar = reading.sonar_m[None, :] if len(reading.sonar_m) else None  # a robot without sonar
+        if sonar is not None and sonar.dtype != np.float64:
+            sonar = np.asarray(sonar, dtype=np.float64)
+        p = observation.pose
+        return Observations(
+            ranges if ranges.dtype == np.float64 else np.asarray(ranges, dtype=np.float64),
+            self.geometry,
+            sonar,
+            self.sonar_angles,
+            self.sensors.sonar.max_range_m,
+            self._target_names,
+            bearing,
+            rng,
+            np.array([[p.x, p.y, p.theta]], dtype=np.float64),
+        )
+
     def command(self, observation: Observation) -> tuple[float, float]:
         reading = observation.reading
-        obs = Observations.from_detections(
-            ranges_m=reading.ranges_m[None, :],
-            geometry=self.geometry,
-            detections=[reading.detections],
-            target_names=self.targets,
-            sonar_m=reading.sonar_m[None, :] if len(reading.sonar_m) else None,  # a robot without sonar
-            sonar_angles_rad=self.sonar_angles,
-            sonar_max_m=self.sensors.sonar.max_range_m,
-            pose=np.array([[observation.pose.x, observation.pose.y, observation.pose.theta]]),
-        )
+        obs = self._observations(observation)
         outputs = compute(obs, self.table.behaviors, self.params, self.behavior_state)
-        reached = {d.name for d in reading.detections if target_reached(d.range_m, self.sensors.camera)}
+        reach = self.sensors.camera
+        reached = {d.name for d in reading.detections if target_reached(d.range_m, reach)}
         dec = self.runtime.decide(outputs, reached, self._cues(observation))
         for goal in dec.achieved_now:
             self.reached.append((goal, self.ticks))
@@ -233,7 +270,7 @@ class NetworkStepper:
         if dec.step is None:
             return 0.0, 0.0
         self.unseen_ticks += dec.unseen
-        self.side[step_name_of(dec.path, self.table)].append(
+        self.side[self.step_name(dec.path)].append(
             (float(reading.ranges_m[self._il]), float(reading.ranges_m[self._ir]))
         )
         fx, fy = float(dec.fused[0]), float(dec.fused[1])
@@ -258,5 +295,4 @@ class NetworkStepper:
             self._spin = math.copysign(1.0, heading)
         else:
             self._spin = 0.0
-        v, w = heading_to_command(np.array(heading), self.robot.drive)
-        return float(v), float(w)
+        return heading_command(heading, self.robot.drive)

@@ -161,8 +161,9 @@ class _Log:
     def add_topic(self, *_: object) -> None:
         pass
 
-    def write_raw(self, *_: object) -> None:
-        pass
+    def write_raw(self, topic: str, _t: int, data: bytes) -> None:
+        if topic == "/lfd/overlay":
+            self.scenes.append(json.loads(data))
 
     def write(self, topic: str, _t: int, scene: dict[str, Any]) -> None:
         if topic == "/lfd/overlay":

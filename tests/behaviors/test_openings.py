@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 
 from lfdfuse.behaviors.openings import (
     OpeningParams,
+    OpeningSensor,
     OpeningTracker,
     PassedCounter,
     PassParams,
@@ -172,3 +173,32 @@ def test_the_way_ahead_is_measured_along_the_held_heading() -> None:
     assert ahead_range(r, GEOM, params) == math.inf
     behind = ScanGeometry(math.pi / 2, math.pi / 180, 181, 8.0)  # a scanner that does not look ahead
     assert ahead_range(np.full(181, 1.0), behind, params) == math.inf
+
+
+@settings(max_examples=25, deadline=None)
+@given(seeds)
+def test_the_sensors_short_scans_see_what_its_full_scans_see(seed: int) -> None:
+    """The corridor and spin scans stop where the odometry passes their bound: the same holding,
+    onsets and held headings tick by tick as the scans over the whole deques (which a sensor fed
+    a negative step falls back to), through corridors, openings, stops and turns on the spot."""
+    rng = np.random.default_rng(seed)
+    n = 400
+    r = _corridor_scans(rng, n)
+    for start in rng.integers(0, n - 30, 4):  # rooms: no walls abeam
+        r[start : start + rng.integers(5, 30)] = 6.0
+    step = rng.uniform(0.0, 0.08, n)
+    step[rng.uniform(size=n) < 0.15] = 0.0  # standing, turning on the spot
+    turn = rng.normal(0.0, 0.05, n)
+    turn[rng.uniform(size=n) < 0.08] = rng.choice([0.5, -0.5])
+    short, full = OpeningSensor(GEOM), OpeningSensor(GEOM)
+    full._ordered = False  # as after a negative step: every scan over the whole deque
+    for i in range(n):
+        assert short.update(r[i], float(step[i]), float(turn[i])) == full.update(
+            r[i], float(step[i]), float(turn[i])
+        )
+        assert (short.holding, short.held_turn_rad, short.ahead_m) == (
+            full.holding,
+            full.held_turn_rad,
+            full.ahead_m,
+        )
+        assert short._ordered

@@ -5,10 +5,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse.control.safety import SafetyParams, free_heading
+from lfdfuse.control.safety import BLOCKED, SafetyParams, free_heading, free_heading_reference
 
 ANGLES = np.radians(np.arange(-90.0, 90.5, 1.0))
 P = SafetyParams()
@@ -48,3 +49,42 @@ def test_the_reflex_never_picks_a_blocked_heading_and_stays_within_90_degrees(wa
         assert not blocked(h, np.where(np.isfinite(ranges), ranges, 0.0))
     else:  # nothing free within ±90° of the wanted heading: a turn on the spot
         assert abs(h) > math.pi / 2
+
+
+def _scan(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Ranges with returns near the strip, beyond it, missing, zero, negative and NaN."""
+    r = rng.uniform(0.05, 3.0, n)
+    near = rng.uniform(size=n) < 0.3
+    r[near] = rng.uniform(0.0, 0.9, near.sum())
+    for value, share in ((np.inf, 0.1), (np.nan, 0.05), (0.0, 0.03), (-0.5, 0.02), (-0.0, 0.02)):
+        r[rng.uniform(size=n) < share] = value
+    return r
+
+
+@pytest.mark.skipif(not BLOCKED.ready(), reason="numba kernels unavailable here")
+@settings(max_examples=300, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.floats(-math.pi, math.pi),
+    st.sampled_from([ANGLES, np.radians(np.arange(-180.0, 180.5, 1.0)), np.linspace(-2.3, 2.3, 37)]),
+)
+def test_the_compiled_strip_test_gives_the_references_heading(
+    seed: int, heading: float, angles: np.ndarray
+) -> None:
+    """Free or turned away, bit for bit: the compiled first test and the numpy reference agree."""
+    ranges = _scan(np.random.default_rng(seed), len(angles))
+    got = free_heading(heading, ranges, angles, P)
+    want = free_heading_reference(heading, ranges, angles, P)
+    assert got == want and math.copysign(1.0, got) == math.copysign(1.0, want)
+    d = angles - heading
+    assert BLOCKED(ranges, np.cos(d), np.sin(d), P.lookahead_m, P.halfwidth_m) == blocked_ref(
+        heading, ranges, angles
+    )
+
+
+def blocked_ref(heading: float, ranges: np.ndarray, angles: np.ndarray) -> bool:
+    """The reference's first test (no return counts as range 0)."""
+    r = np.where(np.isfinite(ranges) & (ranges > 0), ranges, 0.0)
+    d = angles - heading
+    along, lateral = r * np.cos(d), np.abs(r * np.sin(d))
+    return bool(((along > 0) & (along < P.lookahead_m) & (lateral < P.halfwidth_m)).any())

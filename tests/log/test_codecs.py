@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse.log import lfd
+from lfdfuse.log import lfd, lfd_tick
 from lfdfuse.log import messages as msg
 from lfdfuse.log.codec import MessageError
 from lfdfuse.log.command import COMMAND_SOURCES, DRIVE_TOPICS, DriveCommand
@@ -350,6 +350,49 @@ def test_arrow_scenes_match_their_schema_and_point_along_their_vectors(
     for prim, a in zip(ent["arrows"], drawn, strict=True):
         yaw = 2 * math.atan2(prim["pose"]["orientation"]["z"], prim["pose"]["orientation"]["w"])
         assert math.isclose(math.remainder(yaw - math.atan2(a.vy, a.vx), 2 * math.pi), 0, abs_tol=1e-9)
+
+
+COLOR = st.tuples(*(st.floats(0.0, 1.0),) * 3)
+
+
+@FAST
+@given(T_NS, st.lists(st.tuples(REAL, REAL, COLOR, st.floats(0.0, 3.0)), max_size=10))
+def test_the_overlay_encoder_writes_the_arrow_scenes_bytes(
+    t: int, arrows: list[tuple[float, float, tuple[float, float, float], float]]
+) -> None:
+    """``encode_arrow_scene`` (shared position and colour objects) writes what ``arrow_scene``
+    and ``arrow_scene_of`` make, byte for byte, twice in a row."""
+    want = orjson.dumps(msg.arrow_scene(t, "fusion", [msg.Arrow(*a) for a in arrows]))
+    assert orjson.dumps(msg.arrow_scene_of(t, "fusion", arrows)) == want
+    assert msg.encode_arrow_scene(t, "fusion", arrows) == want
+    assert msg.encode_arrow_scene(t, "fusion", arrows) == want
+
+
+@FAST
+@given(T_NS, NAMES, st.data())
+def test_the_list_encoders_write_what_the_classes_write(
+    t: int, names: tuple[str, ...], data: st.DataObject
+) -> None:
+    """The ``/lfd`` encoders the execute recorder calls each tick: the codecs' bytes."""
+    k = len(names)
+    vec = np.array(
+        data.draw(st.lists(st.tuples(REAL, REAL), min_size=k, max_size=k)), dtype=np.float64
+    ).reshape(k, 2)
+    app = np.array(data.draw(st.lists(st.booleans(), min_size=k, max_size=k)), dtype=bool)
+    goal = np.array(data.draw(st.lists(st.booleans(), min_size=k, max_size=k)), dtype=bool)
+    row = lfd.BehaviorRow(t, names, vec, app, goal).encode()
+    assert lfd.encode_behaviors(t, names, vec, app, goal) == row
+    assert lfd_tick.encode_behavior_lists(t, names, vec.tolist(), app.tolist(), goal.tolist()) == row
+    bac = data.draw(st.integers(0, 2**62))
+    assert lfd.encode_bac(t, bac, list(names)) == lfd.Bac(t, bac, names).encode()
+    weights = dict(zip(names, data.draw(st.lists(REAL, min_size=k, max_size=k)), strict=True))
+    x, y = data.draw(REAL), data.draw(REAL)
+    assert lfd.encode_fused(t, x, y, weights) == lfd.FusedVector(t, x, y, weights).encode()
+    step = data.draw(OPT_NAME)
+    assert (
+        lfd.encode_step(t, step=step, goal=None, bac=bac, default_weights=True, achieved=list(names))
+        == lfd.NetworkStep(t, step, None, bac, True, names).encode()
+    )
 
 
 @FAST
