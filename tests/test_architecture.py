@@ -293,8 +293,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "errors",
         "progress",
         "words",
-        "jit",
-        "pairwise",
+        "kernels",
     ),  # the package root (its version), the error hierarchy, kernels and numpy's sum in them
     ("files", "validate", "parallel"),
     ("robot", "control"),  # the types every stage shares and the ROS conversion; vector ↔ command

@@ -8,8 +8,10 @@ from typing import Any
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
-from lfdfuse import jit
+from lfdfuse.kernels import jit
 
 
 def _sum(x: np.ndarray) -> float:
@@ -78,3 +80,9 @@ def test_the_kernel_mode_follows_the_environment_at_once(monkeypatch: pytest.Mon
         assert jit.compiled_wanted() is wanted
     monkeypatch.delenv(jit.MODE)
     assert jit.compiled_wanted()
+
+
+@given(st.integers(min_value=0, max_value=50))
+def test_a_warmup_answers_in_numpy_for_its_calls_then_compiled(calls: int) -> None:
+    warm = jit.Warmup(calls)
+    assert [warm() for _ in range(calls + 3)] == [False] * calls + [True] * 3

@@ -10,8 +10,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse import jit
-from lfdfuse.pairwise import STACK, pairwise_sum, pairwise_sum_reference
+from lfdfuse.kernels import jit
+from lfdfuse.kernels.pairwise import STACK, pairwise_sum, pairwise_sum_reference
 
 
 def _loop_sum(x: np.ndarray) -> float:

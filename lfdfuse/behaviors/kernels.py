@@ -7,10 +7,10 @@ call. Each stands for a numpy function that stays the reference
 :func:`~lfdfuse.behaviors.openings.ahead_range_reference`, the primitives of
 :mod:`lfdfuse.behaviors.library`) and gives the same bits: comparisons and counts are exact,
 the beam bearings come in wrapped by numpy (no transcendental function of numba's own enters a
-result), and a sum over beams is numpy's own pairwise sum (:func:`lfdfuse.pairwise.pairwise_sum`,
+result), and a sum over beams is numpy's own pairwise sum (:func:`lfdfuse.kernels.pairwise.pairwise_sum`,
 operation for operation), so a scan computed alone, live, equals the same scan computed in a log.
 
-Every loop is a :func:`lfdfuse.jit.kernel`: nothing here imports numba.
+Every loop is a :func:`lfdfuse.kernels.jit.kernel`: nothing here imports numba.
 """
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ import math
 
 import numpy as np
 
-from lfdfuse.jit import kernel
-from lfdfuse.pairwise import STACK, pairwise_sum
+from lfdfuse.kernels.jit import kernel
+from lfdfuse.kernels.pairwise import STACK, pairwise_sum
 
 
 def _side_open_loop(

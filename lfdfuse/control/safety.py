@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lfdfuse.jit import kernel
+from lfdfuse.kernels.jit import Warmup, kernel
 
 
 @dataclass(frozen=True)
@@ -39,6 +39,8 @@ def _blocked_loop(
 
 #: the common case of :func:`free_heading` (the wanted heading free) in one compiled pass
 BLOCKED = kernel(_blocked_loop)
+#: a short run (a few seconds simulated) tests its headings in numpy: numba would cost it more
+_WARMUP = Warmup(1000)
 
 
 def free_heading(
@@ -55,6 +57,7 @@ def free_heading(
         and ranges_m.dtype == np.float64
         and angles_rad.dtype == np.float64
         and ranges_m.shape == angles_rad.shape
+        and _WARMUP()
         and BLOCKED.ready()
     ):
         d1 = angles_rad - rel_rad

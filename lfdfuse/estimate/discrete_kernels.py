@@ -22,7 +22,7 @@ import numpy as np
 
 from lfdfuse.estimate import kernels
 from lfdfuse.estimate.kernels import BLOCK_ELEMENTS, logsumexp_last
-from lfdfuse.jit import kernel
+from lfdfuse.kernels.jit import kernel
 
 #: grid cells of the tabulated von Mises CDF over a full turn (0.18°: fine for σ ≥ 2°)
 CDF_GRID = 2048

@@ -1,6 +1,6 @@
 """The compiled loops of the ``pf`` sampler's likelihood (:mod:`lfdfuse.estimate.model`).
 
-Each is a plain loop that numba compiles on first use (:mod:`lfdfuse.jit`); the numpy function
+Each is a plain loop that numba compiles on first use (:mod:`lfdfuse.kernels.jit`); the numpy function
 it stands for stays the reference (:func:`sum_cos_reference`,
 :func:`~lfdfuse.estimate.model.log_marginal`), and the tests hold the two to 1e-12. A long row's
 particles are shared out over the machine's cores (:func:`continuous_loglik`: threads, the loops
@@ -18,8 +18,8 @@ from typing import Protocol
 
 import numpy as np
 
-from lfdfuse.jit import kernel
-from lfdfuse.pairwise import STACK, pairwise_sum
+from lfdfuse.kernels.jit import kernel
+from lfdfuse.kernels.pairwise import STACK, pairwise_sum
 
 
 class RowSteps(Protocol):

@@ -18,8 +18,8 @@ import numpy as np
 
 from lfdfuse.estimate.kernels import _logsumexp_rows_loop, logsumexp_last
 from lfdfuse.estimate.resampling import ess
-from lfdfuse.jit import kernel
-from lfdfuse.pairwise import STACK, pairwise_sum
+from lfdfuse.kernels.jit import kernel
+from lfdfuse.kernels.pairwise import STACK, pairwise_sum
 
 
 def move_frame_reference(logw: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

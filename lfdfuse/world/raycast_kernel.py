@@ -12,7 +12,7 @@ minimum does not depend on the order it is taken in, so the results equal the nu
 reference's (a range of zero is +0.0 in both). The beam directions come in precomputed (numpy's ``cos``/``sin``), so no
 transcendental function of numba's own enters a result.
 
-Every loop is a :func:`lfdfuse.jit.kernel`: nothing here imports numba.
+Every loop is a :func:`lfdfuse.kernels.jit.kernel`: nothing here imports numba.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from lfdfuse.jit import kernel
+from lfdfuse.kernels.jit import kernel
 
 
 def _solve(wx: float, wy: float, ex: float, ey: float, ux: float, uy: float) -> float:

@@ -15,7 +15,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse import jit
 from lfdfuse.behaviors import kernels
 from lfdfuse.behaviors.openings import (
     OpeningParams,
@@ -26,6 +25,7 @@ from lfdfuse.behaviors.openings import (
     side_openings_reference,
 )
 from lfdfuse.behaviors.primitives import BehaviorState, Observations, compute, resolve_behaviors
+from lfdfuse.kernels import jit
 from lfdfuse.robot.readings import ScanGeometry
 
 needs_numba = pytest.mark.skipif(

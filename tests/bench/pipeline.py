@@ -23,7 +23,7 @@ import orjson
 import shapely
 from shapely.geometry import LineString, Point
 
-from lfdfuse import jit
+from lfdfuse.kernels import jit
 from lfdfuse.log import messages as msg
 from lfdfuse.sim.loop import RunSummary
 from lfdfuse.sim.sensors import LaserParams
@@ -311,7 +311,7 @@ def bench_pf(rows: list[Row], folder: Path) -> None:
 @contextlib.contextmanager
 def reference_kernels() -> Iterator[None]:
     """Run the numpy references of every compiled kernel inside the block (``LFDFUSE_KERNELS``)."""
-    from lfdfuse.jit import MODE
+    from lfdfuse.kernels.jit import MODE
 
     old = os.environ.get(MODE)
     os.environ[MODE] = "numpy"

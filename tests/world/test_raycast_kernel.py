@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lfdfuse import jit
+from lfdfuse.kernels import jit
 from lfdfuse.world import raycast_kernel, segments
 from lfdfuse.world.model import load_world
 from lfdfuse.world.raycast import RayCaster, near_pairs

@@ -3,7 +3,7 @@
 ``np.add.reduce`` of a contiguous float64 array sums blocks of at most :data:`PW_BLOCK` elements
 with eight accumulators and splits longer runs in two (at a multiple of eight), adding the
 halves. :func:`pairwise_sum` does the same over a scratch buffer for a loop compiled by
-:func:`lfdfuse.jit.kernel` (named in its ``calls``); :func:`pairwise_sum_reference` is the same
+:func:`lfdfuse.kernels.jit.kernel` (named in its ``calls``); :func:`pairwise_sum_reference` is the same
 model in plain Python, held to numpy by the tests.
 """
 

@@ -118,6 +118,22 @@ def _import_numba() -> Any:
     return _numba["module"]
 
 
+class Warmup:
+    """Calls a process answers with the numpy references before it loads compiled loops: loading
+    numba and its cached kernels costs about a second of CPU, more than a short run's calls take
+    in numpy (the answers are the same either way). One per family of loops; call it once a call."""
+
+    def __init__(self, calls: int) -> None:
+        self.left = calls
+
+    def __call__(self) -> bool:
+        """True once the family has made its warm-up calls (this one counts)."""
+        if self.left > 0:
+            self.left -= 1
+            return False
+        return True
+
+
 class Kernel:
     """A loop compiled by numba on first use, or None of it when it cannot be (see :meth:`ready`)."""
 
