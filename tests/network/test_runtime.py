@@ -11,7 +11,14 @@ from hypothesis import strategies as st
 
 from lfdfuse.behaviors.primitives import BehaviorOutputs
 from lfdfuse.network.landmark_goals import Cues
-from lfdfuse.network.runtime import DRIVE_ON_RAD, SETTLE_M, SETTLE_RAD, NetworkRuntime, step_name_of
+from lfdfuse.network.runtime import (
+    DRIVE_ON_RAD,
+    SETTLE_M,
+    SETTLE_RAD,
+    TURN_RAD,
+    NetworkRuntime,
+    step_name_of,
+)
 from lfdfuse.network.table import FusionTable, parse_table
 
 NAMES = ("avoid", "attract_red", "wander", "attract_blue")
@@ -162,13 +169,14 @@ def test_a_step_driving_on_to_a_side_opening_keeps_near_the_held_heading(
         assert np.allclose(dec.fused, vec[2])
 
 
-def _turn(side: str, angle_rad: float) -> FusionTable:
-    """One goal step whose sub-steps turn ``angle_rad`` to ``side`` with ``wander`` alone, then
-    reach red with ``wander`` alone."""
+def _turn(side: str, angle_rad: float, lag: float | None = None) -> FusionTable:
+    """One goal step whose sub-steps turn ``angle_rad`` to ``side`` with ``wander`` alone (sensed
+    with ``lag``; None: the default sensor), then reach red with ``wander`` alone."""
+    sensed = {} if lag is None else {"lag_m": lag}
     sub = [
         {
             "name": f"turn-{side}",
-            "landmark": {"turned": side, "angle_rad": angle_rad},
+            "landmark": {"turned": side, "angle_rad": angle_rad, **sensed},
             "fusion": [{"bac": 0b0100, "weights": {"wander": 1.0}}],
         },
         {
@@ -201,6 +209,35 @@ def test_a_turn_step_never_steers_to_the_other_side(pull: float, side: str) -> N
         assert np.allclose(dec.fused, [2.0 * math.cos(pull), 2.0 * math.sin(pull)])
     else:
         assert np.allclose(dec.fused, [2.0, 0.0])
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(-3.1, 3.1), st.sampled_from(["left", "right"]), st.sampled_from([None, 1.5]))
+def test_a_turn_step_turns_toward_the_opening_while_it_is_beside_the_robot(
+    pull: float, side: str, lag: float | None
+) -> None:
+    """While the opening the turn is for is still beside the robot (the tracker of the turn's own
+    sensor is inside it on that side), the fused heading turns at least TURN_RAD toward the side,
+    its length kept; a pull further that way is untouched. Where the rows pull straight on or
+    the other way (the turn began at the opening's far edge) the robot turns into the opening
+    instead of driving past its mouth."""
+    t = _turn(side, 1.0, lag)
+    rt = NetworkRuntime(t)
+    beside = (side == "left", side == "right")
+    # only the turn's own sensor has the opening beside it
+    own, other = Cues(beside=beside), Cues()
+    cues = Cues(beside=beside, lagged=((1.5, other),)) if lag is None else Cues(lagged=((1.5, own),))
+    dec = rt.decide(_pull(pull), set(), cues)
+    assert step_name_of(dec.path, t) == f"reach-red/turn-{side}"
+    sign = 1.0 if side == "left" else -1.0
+    assert math.isclose(float(np.hypot(*dec.fused)), 2.0)
+    if sign * pull >= TURN_RAD:
+        assert np.allclose(dec.fused, [2.0 * math.cos(pull), 2.0 * math.sin(pull)])
+    else:
+        assert math.isclose(math.atan2(dec.fused[1], dec.fused[0]), sign * TURN_RAD, abs_tol=1e-9)
+    # once the opening is no longer beside it, a pull to the side is the rows' own again
+    dec = rt.decide(_pull(sign * 0.1), set(), Cues(lagged=((1.5, Cues()),)))
+    assert np.allclose(dec.fused, [2.0 * math.cos(sign * 0.1), 2.0 * math.sin(sign * 0.1)])
 
 
 @settings(max_examples=40, deadline=None)
