@@ -358,12 +358,12 @@ class PassParams:
     #: way back out) no deeper than ``dead_end_m`` past where it was met, is a dead end the robot
     #: comes back out of: what it counted in there is undone, and openings met on the way back
     #: out (the dead end's mouth, the corridor it left, seen the other way) are not passed, until
-    #: it is back within ``mouth_m`` of the line it met the opening on (in the corridor it left:
-    #: they are at most 2.6 m wide here) and has driven ``merge_m`` on from there. Depths come
-    #: from odometry (the increments integrated), never a map
+    #: it is back within ``mouth_m`` of the line it met the opening on (on its way in the corridor
+    #: it left) and has driven ``merge_m`` on from there — or, wherever it is, ``2 · dead_end_m``
+    #: after it turned round. Depths come from odometry (the increments integrated), never a map
     dead_end_m: float = 8.0
     round_rad: float = math.radians(135.0)
-    mouth_m: float = 1.5
+    mouth_m: float = 0.5
 
 
 class PassedCounter:
@@ -394,15 +394,17 @@ class PassedCounter:
         self._heading = 0.0
         self._xy = (0.0, 0.0)  # odometry integrated: where the robot is from where it started
         self._last = [-math.inf, -math.inf]  # odometry of the last onset per side
-        #: the last opening turned into: where it was met (x, y), the heading into it, and the
-        #: counts then (passed; the openings still undecided that were met before it)
-        self._into: (
-            tuple[float, float, float, tuple[int, int], list[tuple[int, float, float, float, float]]] | None
-        ) = None
-        #: coming back out of a dead end: the line it was met on (x, y, heading into it), and the
-        #: odometry from which it is back out (inf: not yet)
+        #: the openings turned into, outermost first, each while the robot is less than
+        #: ``dead_end_m`` past it: where it was met (x, y), the heading into it, and the counts
+        #: then (passed; the openings still undecided that were met before it)
+        self._into: list[
+            tuple[float, float, float, tuple[int, int], list[tuple[int, float, float, float, float]]]
+        ] = []
+        #: coming back out of a dead end: the line it was met on (x, y, heading into it), the
+        #: odometry from which it is back out (inf: not yet) and that at which it turned round
         self._out: tuple[float, float, float] | None = None
         self._out_from = math.inf
+        self._round_at = 0.0
         #: coming back out of a dead end the robot turned round in: onsets are not openings passed
         self.leaving = False
         #: per side, openings met before this tick and not turned into
@@ -431,7 +433,7 @@ class PassedCounter:
         self._pending = keep
         if into is not None:  # kept, with the counts at its onset, in case it is a dead end
             met_before = [e for e in keep if e[1] < into[3]]
-            self._into = (*into[:3], (self.passed[LEFT], self.passed[RIGHT]), met_before)
+            self._into.append((*into[:3], (self.passed[LEFT], self.passed[RIGHT]), met_before))
         self._dead_end()
         waiting = [sum(1 for e in self._pending if e[0] == side) for side in (LEFT, RIGHT)]
         self.before = (self.passed[LEFT] + waiting[LEFT], self.passed[RIGHT] + waiting[RIGHT])
@@ -452,21 +454,25 @@ class PassedCounter:
         return (self._xy[0] - x0) * math.cos(heading_in) + (self._xy[1] - y0) * math.sin(heading_in)
 
     def _dead_end(self) -> None:
-        """Turned round in the opening last turned into: undo the excursion; back out: count again."""
-        if self._into is not None:
-            x0, y0, heading_in, counts, met_before = self._into
+        """Turned round in an opening turned into: undo the excursion; back out: count again.
+
+        The outermost one the robot has turned round in counts: a robot wiggling in a dead end
+        turns into gaps of its own walls, and turning on round in the outer one undoes that too."""
+        # past dead_end_m: a corridor the route follows on, not a dead end
+        self._into = [e for e in self._into if self._depth(*e[:3]) <= self.params.dead_end_m]
+        for k, (x0, y0, heading_in, counts, met_before) in enumerate(self._into):
             off = self._heading - heading_in
-            if self._depth(x0, y0, heading_in) > self.params.dead_end_m:
-                self._into = None  # a corridor the route follows on: not a dead end
-            elif abs(math.atan2(math.sin(off), math.cos(off))) >= self.params.round_rad:
-                self._into = None
+            if abs(math.atan2(math.sin(off), math.cos(off))) >= self.params.round_rad:
+                del self._into[k:]  # the outer ones stay: the robot may yet turn round in them
                 self.passed = [counts[0], counts[1]]
                 self._pending = list(met_before)
-                self._out, self._out_from = (x0, y0, heading_in), math.inf
+                self._out, self._out_from, self._round_at = (x0, y0, heading_in), math.inf, self._odo_m
+                break
         if self._out is not None:
             if self._out_from == math.inf and self._depth(*self._out) <= self.params.mouth_m:
                 self._out_from = self._odo_m
-            if self._odo_m - self._out_from >= self.params.merge_m:
+            back = self._odo_m - self._out_from >= self.params.merge_m
+            if back or self._odo_m - self._round_at >= 2.0 * self.params.dead_end_m:
                 self._out = None
         self.leaving = self._out is not None
 
