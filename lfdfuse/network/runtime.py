@@ -5,11 +5,11 @@ a nested network is active until its last goal is achieved) → the BAC of this 
 step's weights for the BAC, or the default weights when the BAC was never seen in training (the
 step's own ``default_weights`` when it has them, else the table's) → fused vector, kept to the
 way a sub-goal step goes: in a step that drives on to a side opening, within :data:`DRIVE_ON_RAD`
-of the held heading while the way ahead is open; in a turn, never to the other side, and at least
-:data:`TURN_RAD` toward its side while the opening is still beside the robot; after a turn, within
-:data:`SETTLE_RAD` of the heading it ended on for :data:`SETTLE_M`. Goals are monitored for the
-active step only, so a task that visits the same target twice ("A then B then A") needs it
-reached twice, in order; a goal once achieved stays achieved.
+of the held heading while the way ahead is open; in a turn, never to the other side (straight on),
+:data:`TURN_RAD` toward its side instead where straight on would pass the opening by; after a
+turn, within :data:`SETTLE_RAD` of the heading it ended on for :data:`SETTLE_M`. Goals are
+monitored for the active step only, so a task that visits the same target twice ("A then B then
+A") needs it reached twice, in order; a goal once achieved stays achieved.
 """
 
 from __future__ import annotations
@@ -32,11 +32,13 @@ Path = tuple[int, ...]
 #: by the style's pull toward open space (measured on the generated worlds)
 DRIVE_ON_RAD = math.radians(30.0)
 
-#: a turn step keeps the fused heading at least this far toward its side while the opening it
-#: turns into is still beside the robot (the opening sensor's tracker is inside it on that side):
-#: a turn that begins at the opening's far edge, as a robot that arrives a little later than the
-#: teacher meets it, turns into the opening instead of driving past its mouth where the turn's
-#: rows, learned where the teacher was already turning, pull straight on
+#: where a turn step's rows pull the other way while the opening it turns into is still beside
+#: the robot (the opening sensor's tracker is inside it on that side) and the way ahead goes on
+#: (straight on passes the opening by; at a T or a corner it does not), the fused heading turns
+#: this far toward the turn's side instead of straight on: a turn that begins at the opening's
+#: far edge, as a robot that arrives a little later than the teacher meets it, turns into the
+#: opening instead of driving past its mouth where the turn's rows, learned where the teacher
+#: was already turning, pull away from it
 TURN_RAD = math.radians(30.0)
 
 #: the step after a turn keeps the fused heading within this of the heading the turn ended on for
@@ -155,14 +157,14 @@ class NetworkRuntime:
             return keep_within(fused, -cues.held_turn_rad, DRIVE_ON_RAD)
         if landmark is not None and landmark.kind == "turned":
             # a turn to a side is met only by turning that way: where the turn's rows pull the
-            # other way (the robot is not where the teacher turned), drive straight on instead;
-            # while the opening the turn is for is still beside the robot, turn toward it
+            # other way (the robot is not where the teacher turned), drive straight on instead —
+            # or, where straight on passes the opening by (it is still beside the robot and the
+            # way ahead goes on), turn toward it
             sign = 1.0 if landmark.side == "left" else -1.0
-            side = SIDES.index(landmark.side)
-            least = TURN_RAD if cues.seen_with(landmark.lag_m).beside[side] else 0.0
-            a = math.atan2(fused[1], fused[0])
-            if sign * a < least:
-                a = sign * least
+            if sign * math.atan2(fused[1], fused[0]) < 0.0:
+                seen = cues.seen_with(landmark.lag_m)
+                passing = seen.beside[SIDES.index(landmark.side)] and seen.ahead_open
+                a = sign * TURN_RAD if passing else 0.0
                 n = float(np.hypot(fused[0], fused[1]))
                 return np.array([n * math.cos(a), n * math.sin(a)])
             return fused

@@ -212,32 +212,37 @@ def test_a_turn_step_never_steers_to_the_other_side(pull: float, side: str) -> N
 
 
 @settings(max_examples=60, deadline=None)
-@given(st.floats(-3.1, 3.1), st.sampled_from(["left", "right"]), st.sampled_from([None, 1.5]))
-def test_a_turn_step_turns_toward_the_opening_while_it_is_beside_the_robot(
-    pull: float, side: str, lag: float | None
+@given(st.floats(-3.1, 3.1), st.sampled_from(["left", "right"]), st.sampled_from([None, 1.5]), st.booleans())
+def test_a_turn_step_pulled_away_from_an_opening_still_beside_it_turns_toward_it(
+    pull: float, side: str, lag: float | None, ahead_open: bool
 ) -> None:
-    """While the opening the turn is for is still beside the robot (the tracker of the turn's own
-    sensor is inside it on that side), the fused heading turns at least TURN_RAD toward the side,
-    its length kept; a pull further that way is untouched. Where the rows pull straight on or
-    the other way (the turn began at the opening's far edge) the robot turns into the opening
-    instead of driving past its mouth."""
+    """Where the turn's rows pull the other way while the opening is still beside the robot (the
+    tracker of the turn's own sensor is inside it on that side) and the way ahead goes on, straight
+    on would drive past the opening's mouth: the fused heading turns TURN_RAD toward the side
+    instead, its length kept. Otherwise (the way ahead ends: a T, a corner; or the opening is no
+    longer beside) it drives straight on, and a pull to the side is untouched."""
     t = _turn(side, 1.0, lag)
     rt = NetworkRuntime(t)
     beside = (side == "left", side == "right")
-    # only the turn's own sensor has the opening beside it
-    own, other = Cues(beside=beside), Cues()
-    cues = Cues(beside=beside, lagged=((1.5, other),)) if lag is None else Cues(lagged=((1.5, own),))
+    # only the turn's own sensor has the opening beside it, and the way ahead as given
+    own, other = Cues(beside=beside, ahead_open=ahead_open), Cues(ahead_open=not ahead_open)
+    if lag is None:
+        cues = Cues(beside=beside, ahead_open=ahead_open, lagged=((1.5, other),))
+    else:
+        cues = Cues(ahead_open=not ahead_open, lagged=((1.5, own),))
     dec = rt.decide(_pull(pull), set(), cues)
     assert step_name_of(dec.path, t) == f"reach-red/turn-{side}"
     sign = 1.0 if side == "left" else -1.0
     assert math.isclose(float(np.hypot(*dec.fused)), 2.0)
-    if sign * pull >= TURN_RAD:
+    if sign * pull >= 0.0:
         assert np.allclose(dec.fused, [2.0 * math.cos(pull), 2.0 * math.sin(pull)])
-    else:
+    elif ahead_open:
         assert math.isclose(math.atan2(dec.fused[1], dec.fused[0]), sign * TURN_RAD, abs_tol=1e-9)
-    # once the opening is no longer beside it, a pull to the side is the rows' own again
-    dec = rt.decide(_pull(sign * 0.1), set(), Cues(lagged=((1.5, Cues()),)))
-    assert np.allclose(dec.fused, [2.0 * math.cos(sign * 0.1), 2.0 * math.sin(sign * 0.1)])
+    else:
+        assert np.allclose(dec.fused, [2.0, 0.0])
+    # once the opening is no longer beside it, a pull the other way drives straight on
+    dec = rt.decide(_pull(-sign * 0.1), set(), Cues(lagged=((1.5, Cues()),)))
+    assert np.allclose(dec.fused, [2.0, 0.0])
 
 
 @settings(max_examples=40, deadline=None)
