@@ -11,15 +11,13 @@ from hypothesis import strategies as st
 from lfdfuse.behaviors.openings import (
     OpeningParams,
     OpeningTracker,
-    PassedCounter,
-    PassParams,
     ahead_range,
     odometry_increments,
     opening_onsets,
-    passed_before,
     sensed_onsets,
     side_openings,
 )
+from lfdfuse.behaviors.passing import PassedCounter, PassParams, passed_before
 from lfdfuse.robot.readings import ScanGeometry
 
 # a symmetric 181-beam laser: beam i and beam 180 − i are mirror images
