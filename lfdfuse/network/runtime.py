@@ -33,8 +33,9 @@ Path = tuple[int, ...]
 DRIVE_ON_RAD = math.radians(30.0)
 
 #: where a turn step's rows pull the other way while the opening it turns into is still beside
-#: the robot (the opening sensor's tracker is inside it on that side) and the way ahead goes on
-#: (straight on passes the opening by; at a T or a corner it does not), the fused heading turns
+#: the robot (the opening sensor's tracker is inside it on that side), the way ahead goes on
+#: and the robot heads along it (within :data:`DRIVE_ON_RAD` of the held heading) — straight on
+#: passes the opening by; at a T, a corner or turning round in a room it does not — it turns
 #: this far toward the turn's side instead of straight on: a turn that begins at the opening's
 #: far edge, as a robot that arrives a little later than the teacher meets it, turns into the
 #: opening instead of driving past its mouth where the turn's rows, learned where the teacher
@@ -158,12 +159,14 @@ class NetworkRuntime:
         if landmark is not None and landmark.kind == "turned":
             # a turn to a side is met only by turning that way: where the turn's rows pull the
             # other way (the robot is not where the teacher turned), drive straight on instead —
-            # or, where straight on passes the opening by (it is still beside the robot and the
-            # way ahead goes on), turn toward it
+            # or, where straight on passes the opening by (it is still beside the robot, the way
+            # ahead goes on, and the robot heads along the corridor the sectors are held to), turn
+            # toward it
             sign = 1.0 if landmark.side == "left" else -1.0
             if sign * math.atan2(fused[1], fused[0]) < 0.0:
                 seen = cues.seen_with(landmark.lag_m)
-                passing = seen.beside[SIDES.index(landmark.side)] and seen.ahead_open
+                along = abs(seen.held_turn_rad) <= DRIVE_ON_RAD
+                passing = seen.beside[SIDES.index(landmark.side)] and seen.ahead_open and along
                 a = sign * TURN_RAD if passing else 0.0
                 n = float(np.hypot(fused[0], fused[1]))
                 return np.array([n * math.cos(a), n * math.sin(a)])

@@ -212,31 +212,39 @@ def test_a_turn_step_never_steers_to_the_other_side(pull: float, side: str) -> N
 
 
 @settings(max_examples=60, deadline=None)
-@given(st.floats(-3.1, 3.1), st.sampled_from(["left", "right"]), st.sampled_from([None, 1.5]), st.booleans())
+@given(
+    st.floats(-3.1, 3.1),
+    st.sampled_from(["left", "right"]),
+    st.sampled_from([None, 1.5]),
+    st.booleans(),
+    st.floats(-1.5, 1.5),
+)
 def test_a_turn_step_pulled_away_from_an_opening_still_beside_it_turns_toward_it(
-    pull: float, side: str, lag: float | None, ahead_open: bool
+    pull: float, side: str, lag: float | None, ahead_open: bool, held: float
 ) -> None:
     """Where the turn's rows pull the other way while the opening is still beside the robot (the
     tracker of the turn's own sensor is inside it on that side) and the way ahead goes on, straight
-    on would drive past the opening's mouth: the fused heading turns TURN_RAD toward the side
-    instead, its length kept. Otherwise (the way ahead ends: a T, a corner; or the opening is no
+    on (along the held heading, within DRIVE_ON_RAD of it) would drive past the opening's mouth:
+    the fused heading turns TURN_RAD toward the side instead, its length kept. Otherwise (the way
+    ahead ends: a T, a corner; the robot turned away from the held heading; or the opening is no
     longer beside) it drives straight on, and a pull to the side is untouched."""
     t = _turn(side, 1.0, lag)
     rt = NetworkRuntime(t)
     beside = (side == "left", side == "right")
     # only the turn's own sensor has the opening beside it, and the way ahead as given
-    own, other = Cues(beside=beside, ahead_open=ahead_open), Cues(ahead_open=not ahead_open)
+    own = Cues(beside=beside, ahead_open=ahead_open, held_turn_rad=held)
+    other = Cues(ahead_open=not ahead_open, held_turn_rad=0.0 if abs(held) > DRIVE_ON_RAD else 1.0)
     if lag is None:
-        cues = Cues(beside=beside, ahead_open=ahead_open, lagged=((1.5, other),))
+        cues = Cues(beside=beside, ahead_open=ahead_open, held_turn_rad=held, lagged=((1.5, other),))
     else:
-        cues = Cues(ahead_open=not ahead_open, lagged=((1.5, own),))
+        cues = Cues(ahead_open=not ahead_open, held_turn_rad=other.held_turn_rad, lagged=((1.5, own),))
     dec = rt.decide(_pull(pull), set(), cues)
     assert step_name_of(dec.path, t) == f"reach-red/turn-{side}"
     sign = 1.0 if side == "left" else -1.0
     assert math.isclose(float(np.hypot(*dec.fused)), 2.0)
     if sign * pull >= 0.0:
         assert np.allclose(dec.fused, [2.0 * math.cos(pull), 2.0 * math.sin(pull)])
-    elif ahead_open:
+    elif ahead_open and abs(held) <= DRIVE_ON_RAD:
         assert math.isclose(math.atan2(dec.fused[1], dec.fused[0]), sign * TURN_RAD, abs_tol=1e-9)
     else:
         assert np.allclose(dec.fused, [2.0, 0.0])
