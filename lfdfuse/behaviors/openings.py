@@ -13,8 +13,9 @@ side sector reach far), and how far it drove and how much it turned since some e
   heading the robot had ``lag_m`` metres of travel ago while it was in a corridor there (in a
   room they turn with the robot); :func:`sensed_onsets` runs it over a log. This is what
   segmentation and execution both use.
-* :class:`PassedCounter` — onsets → openings passed by on each side (not turned into: a
-  corner the route follows, a turn-off); :func:`passed_before` runs it over a log.
+* :class:`~lfdfuse.behaviors.passing.PassedCounter` (in :mod:`lfdfuse.behaviors.passing`) —
+  onsets → openings passed by on each side (not turned into: a corner the route follows, a
+  turn-off); :func:`~lfdfuse.behaviors.passing.passed_before` runs it over a log.
 * :func:`odometry_increments` — ``(N, 3)`` poses → distance (m) and signed heading change
   (rad) per step: relative motion only, as wheel odometry gives it.
 """
@@ -376,91 +377,6 @@ def sensed_onsets(
         onsets[i] = sensor.update(r[i], float(step_m[i]), float(turn_rad[i]))
         held[i] = sensor.held_turn_rad
     return onsets, held
-
-
-@dataclass(frozen=True)
-class PassParams:
-    """When an opening counts as passed by rather than turned into (metres, radians)."""
-
-    #: turned this far toward the opening's side, from the heading the sectors were held at
-    #: when it was met, ...
-    enter_rad: float = math.radians(45.0)
-    #: ... within this much travel after it: the route turned into it (a corner, a turn-off);
-    #: an opening driven past this far without that turn was passed by
-    pass_m: float = 2.5
-    #: an onset this close (travel) after the last one on its side is that opening flickering
-    #: at its edge (met while turning, the sectors sweep its corner twice), not another one
-    merge_m: float = 1.5
-
-
-class PassedCounter:
-    """Openings passed by on each side since a start: onsets the robot did not turn into.
-
-    Where an opening is met while turning (a corner cut short, a turn begun early) its onset
-    comes and goes with the line each driver takes; an opening the route turns into is not one
-    it passes by, whoever meets it. Counting only openings driven past gives the same count to
-    a teacher and a robot on the same route. Fed one tick at a time (:meth:`update`); the count
-    on a side at a tick is :attr:`before` (openings before this tick's onsets, passed or still
-    undecided, not turned into).
-    """
-
-    def __init__(self, params: PassParams = PassParams()) -> None:
-        self.params = params
-        self.passed = [0, 0]
-        self._pending: list[tuple[int, float, float]] = []  # (side, odometry, held heading) of an onset
-        self._odo_m = 0.0
-        self._heading = 0.0
-        self._last = [-math.inf, -math.inf]  # odometry of the last onset per side
-        #: per side, openings met before this tick and not turned into
-        self.before = (0, 0)
-        #: per side, whether this tick's onset is a new opening (not one flickering at its edge)
-        self.new = (False, False)
-
-    def update(self, onset: tuple[bool, bool], step_m: float, turn_rad: float, held_turn_rad: float) -> None:
-        """This tick's onsets (left, right), odometry increment (m, rad), and how far the robot
-        has turned from the heading the sectors are held at (rad, + = left)."""
-        self._odo_m += step_m
-        self._heading += turn_rad
-        keep = []
-        for side, odo, held in self._pending:
-            sign = 1.0 if side == LEFT else -1.0
-            if sign * (self._heading - held) >= self.params.enter_rad:
-                continue  # turned into: not passed
-            if self._odo_m - odo >= self.params.pass_m:
-                self.passed[side] += 1
-                continue
-            keep.append((side, odo, held))
-        self._pending = keep
-        waiting = [sum(1 for s, _, _ in keep if s == side) for side in (LEFT, RIGHT)] if keep else [0, 0]
-        self.before = (self.passed[LEFT] + waiting[LEFT], self.passed[RIGHT] + waiting[RIGHT])
-        new = [False, False]
-        for side in (LEFT, RIGHT):
-            if onset[side]:
-                if self._odo_m - self._last[side] >= self.params.merge_m:
-                    self._pending.append((side, self._odo_m, self._heading - held_turn_rad))
-                    new[side] = True
-                self._last[side] = self._odo_m
-        self.new = (new[LEFT], new[RIGHT])
-
-
-def passed_before(
-    onsets: np.ndarray,
-    step_m: np.ndarray,
-    turn_rad: np.ndarray,
-    held_rad: np.ndarray,
-    params: PassParams = PassParams(),
-) -> tuple[np.ndarray, np.ndarray]:
-    """``(N, 2)`` :attr:`PassedCounter.before` and ``(N, 2)`` :attr:`PassedCounter.new` at each
-    tick of a log's cues, counted from its first tick."""
-    counter = PassedCounter(params)
-    before = np.zeros((len(onsets), 2), dtype=np.int64)
-    new = np.zeros((len(onsets), 2), dtype=bool)
-    for i in range(len(onsets)):
-        counter.update(
-            (bool(onsets[i, 0]), bool(onsets[i, 1])), float(step_m[i]), float(turn_rad[i]), float(held_rad[i])
-        )
-        before[i], new[i] = counter.before, counter.new
-    return before, new
 
 
 def opening_onsets(

@@ -18,7 +18,7 @@ its own sensors — never map coordinates:
       closed (the robot veered toward it and sees its far wall) is the one if the way ahead
       reads open while the opening is still beside the robot;
     - the ``nth`` (or a later one) by ``count``: ``all`` onsets on that side (what a table without ``count`` means), or only the openings ``passed`` by, not turned
-      into (:class:`lfdfuse.behaviors.openings.PassedCounter`). Corners met while turning
+      into (:class:`lfdfuse.behaviors.passing.PassedCounter`). Corners met while turning
       come and go with the line each driver takes; counted, they made the robot take the
       opening before or after the teacher's from another start;
     - or, with ``within_m``, the first one once ``odometry_m − within_m`` has been driven,
@@ -53,7 +53,8 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any, ClassVar
 
-from lfdfuse.behaviors.openings import SIDES, PassedCounter
+from lfdfuse.behaviors.openings import SIDES
+from lfdfuse.behaviors.passing import PassedCounter
 from lfdfuse.errors import ConfigError
 
 
@@ -141,7 +142,7 @@ class OpeningCount(StrEnum):
 
     #: every onset on the side (a table without ``count`` means this)
     ALL = "all"
-    #: openings passed by, not turned into (:class:`lfdfuse.behaviors.openings.PassedCounter`)
+    #: openings passed by, not turned into (:class:`lfdfuse.behaviors.passing.PassedCounter`)
     PASSED = "passed"
 
 

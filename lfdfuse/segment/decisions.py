@@ -37,7 +37,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from lfdfuse.behaviors.openings import SIDES, PassParams
+from lfdfuse.behaviors.openings import SIDES
+from lfdfuse.behaviors.passing import PassParams
 from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.segment.track import (
     LandmarkTrack,

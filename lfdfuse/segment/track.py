@@ -17,13 +17,12 @@ import numpy as np
 
 from lfdfuse.behaviors.openings import (
     OpeningParams,
-    PassParams,
     ahead_range,
     odometry_increments,
-    passed_before,
     sensed_onsets,
     side_openings,
 )
+from lfdfuse.behaviors.passing import PassParams, passed_before
 from lfdfuse.robot.readings import ScanGeometry
 
 

@@ -12,15 +12,13 @@ from lfdfuse.behaviors.openings import (
     OpeningParams,
     OpeningSensor,
     OpeningTracker,
-    PassedCounter,
-    PassParams,
     ahead_range,
     odometry_increments,
     opening_onsets,
-    passed_before,
     sensed_onsets,
     side_openings,
 )
+from lfdfuse.behaviors.passing import PassedCounter, PassParams, passed_before
 from lfdfuse.robot.readings import ScanGeometry
 
 # a symmetric 181-beam laser: beam i and beam 180 − i are mirror images
@@ -147,6 +145,75 @@ def test_an_onset_flickering_at_an_openings_edge_is_that_opening() -> None:
     assert c.before == (1, 0)
     c.update((True, False), 0.1, 0.0, 0.0)  # 3 m on: the next one
     assert c.new == (True, False)
+
+
+def _turn_on_the_spot(counter: PassedCounter, rad: float, ticks: int = 12) -> None:
+    _drive(counter, ticks, step_m=0.0, turn_rad=rad / ticks)
+
+
+def _into_a_dead_end_and_out(c: PassedCounter, depth_m: float) -> None:
+    """Turn left into an opening met now, drive ``depth_m`` in, passing a niche on the right,
+    turn round, and drive back out meeting openings on both sides (the niche, the dead end's
+    mouth and the corridor it left, seen the other way), then turn left: on along the route."""
+    c.update((True, False), 0.1, 0.0, 0.0)
+    _drive(c, 10, step_m=0.05, turn_rad=math.radians(9))  # into it
+    _drive(c, 10)
+    c.update((False, True), 0.1, 0.0, 0.0)  # a niche in it, driven past
+    _drive(c, int(depth_m / 0.1) - 11)
+    _turn_on_the_spot(c, math.radians(180))
+    c.update((True, False), 0.1, 0.0, 0.0)  # the niche, the other way
+    assert c.leaving and c.new == (False, False)
+    _drive(c, int(depth_m / 0.1) - 5)
+    c.update((True, True), 0.1, 0.0, 0.0)  # the corridor it left, both ways
+    assert c.new == (False, False)
+    _drive(c, 10, step_m=0.05, turn_rad=math.radians(9))  # on along the route
+    _drive(c, 20)
+
+
+def test_openings_met_coming_back_out_of_a_dead_end_are_not_passed() -> None:
+    """A robot that strays into a dead end the route passes by, turns round in it and comes back
+    out: what it counted in there is undone, and nothing it meets on the way out counts; once back
+    on the route, openings count again from where they were."""
+    c = PassedCounter()
+    c.update((False, True), 0.1, 0.0, 0.0)  # an opening on the right, driven past
+    _drive(c, 30)
+    assert c.before == (0, 1)
+    _into_a_dead_end_and_out(c, 5.0)
+    assert not c.leaving and c.before == (0, 1) and c.passed == [0, 1]
+    c.update((False, True), 0.1, 0.0, 0.0)  # the next opening on the route: the 2nd on the right
+    assert c.new == (False, True)
+    _drive(c, 30)
+    assert c.before == (0, 2)
+
+
+def test_a_corridor_the_route_turns_into_and_follows_is_not_a_dead_end() -> None:
+    """Turned round only past ``dead_end_m`` of the opening turned into: the openings met after
+    are counted as any others (the way back along a corridor followed is a route too)."""
+    c = PassedCounter()
+    c.update((True, False), 0.1, 0.0, 0.0)  # a corner on the left: the route turns into it
+    _drive(c, 10, step_m=0.05, turn_rad=math.radians(9))
+    _drive(c, int(PassParams().dead_end_m / 0.1) + 5)
+    c.update((False, True), 0.1, 0.0, 0.0)  # an opening on the right, driven past
+    _drive(c, 30)
+    _turn_on_the_spot(c, math.radians(180))
+    assert not c.leaving
+    c.update((True, False), 0.1, 0.0, 0.0)  # the same opening, now on the left
+    assert c.new == (True, False)
+    _drive(c, 30)
+    assert c.before == (1, 1)
+
+
+def test_a_driver_who_never_turns_round_counts_as_before_a_dead_end_rule() -> None:
+    """The dead-end rule only undoes; without a turn round the counts are those of a counter
+    that never turns round (a long straight drive, turns into corners and junctions)."""
+    rng = np.random.default_rng(5)
+    n = 400
+    onsets = rng.random((n, 2)) < 0.03
+    step = rng.uniform(0.05, 0.1, n)
+    turn = rng.uniform(-0.06, 0.06, n)  # never more than 130° within 8 m in either sense
+    before, new = passed_before(onsets, step, turn, np.zeros(n))
+    off, off_new = passed_before(onsets, step, turn, np.zeros(n), PassParams(dead_end_m=0.0))
+    assert np.array_equal(before, off) and np.array_equal(new, off_new)
 
 
 def test_the_counter_over_a_log_is_the_counter_tick_by_tick() -> None:
