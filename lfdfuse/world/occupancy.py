@@ -24,9 +24,6 @@ from typing import Any
 import numpy as np
 import shapely
 import yaml
-from PIL import Image
-from scipy import ndimage
-from skimage import measure
 
 from lfdfuse.errors import WorldError
 from lfdfuse.validate import number
@@ -110,6 +107,8 @@ def parse_map_yaml(data: dict[str, Any], *, folder: Path, origin: str) -> MapInf
 
 def read_shades(path: Path, *, origin: str) -> np.ndarray:
     """The image as ``(H, W)`` float shades 0…255 (mean of the colour channels, alpha ignored)."""
+    from PIL import Image  # the image stack, here and below, only where a map image is read
+
     try:
         opened = Image.open(path)
     except FileNotFoundError:
@@ -159,12 +158,16 @@ def free_cells(shades: np.ndarray, info: MapInfo) -> np.ndarray:
 
 def _clearance_px(free: np.ndarray) -> np.ndarray:
     """Distance (cells) from each free cell centre to the nearest non-free cell edge (0 if not free)."""
+    from scipy import ndimage
+
     padded = np.pad(free, 1, constant_values=False)
     return np.asarray(np.maximum(ndimage.distance_transform_edt(padded)[1:-1, 1:-1] - 0.5, 0.0))
 
 
 def fill_pockets(free: np.ndarray, *, radius_px: float) -> np.ndarray:
     """``free`` without the 4-connected free regions where no cell has ``radius_px`` of clearance."""
+    from scipy import ndimage
+
     labels, n = ndimage.label(free)
     if n == 0:
         return free
@@ -179,6 +182,8 @@ def wall_lines(free: np.ndarray, *, tolerance_px: float) -> list[np.ndarray]:
     Marching squares at level 0.5 puts the boundary on the cell edges; walls join diagonally
     (a free diagonal pinch is closed); then Douglas–Peucker simplification to ``tolerance_px``.
     """
+    from skimage import measure
+
     solid = np.pad(~free, 1, constant_values=True).astype(np.float32)
     contours = measure.find_contours(solid, 0.5, fully_connected="high")
     if not contours:
@@ -198,6 +203,8 @@ def default_start(free: np.ndarray, *, radius_px: float) -> tuple[int, int, floa
     The heading (rad, in the image frame: 0 = +col, π/2 = −row) is the longest line of sight
     among 36 directions. Raises :class:`WorldError` when the robot fits nowhere.
     """
+    from scipy import ndimage
+
     clear = _clearance_px(free)
     room = clear > radius_px
     labels, n = ndimage.label(room)
