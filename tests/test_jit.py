@@ -85,4 +85,6 @@ def test_the_kernel_mode_follows_the_environment_at_once(monkeypatch: pytest.Mon
 @given(st.integers(min_value=0, max_value=50))
 def test_a_warmup_answers_in_numpy_for_its_calls_then_compiled(calls: int) -> None:
     warm = jit.Warmup(calls)
-    assert [warm() for _ in range(calls + 3)] == [False] * calls + [True] * 3
+    seen = [(warm.done, warm()) for _ in range(calls + 3)]
+    assert [w for _, w in seen] == [False] * calls + [True] * 3
+    assert [d for d, _ in seen] == [calls == 0] + [i >= calls for i in range(1, calls + 3)]

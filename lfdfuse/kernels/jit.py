@@ -126,6 +126,11 @@ class Warmup:
     def __init__(self, calls: int) -> None:
         self.left = calls
 
+    @property
+    def done(self) -> bool:
+        """Whether the family has made its warm-up calls (without counting one)."""
+        return self.left <= 0
+
     def __call__(self) -> bool:
         """True once the family has made its warm-up calls (this one counts)."""
         if self.left > 0:

@@ -26,7 +26,7 @@ from collections import OrderedDict
 import numpy as np
 
 from lfdfuse.world import raycast_kernel as _k
-from lfdfuse.world.segments import _EPS, _collinear, _point_segment_distance, _warm, intersect, near_pairs
+from lfdfuse.world.segments import _EPS, WARMUP, _collinear, _point_segment_distance, intersect, near_pairs
 
 __all__ = ["RayCaster", "intersect", "near_pairs"]
 
@@ -278,7 +278,7 @@ class RayCaster:
         process has made its first ``segments._WARMUP_CALLS`` calls), else :meth:`cast_reference`: the
         same values.
         """
-        if _warm() and _k.cast_sectors_loop.ready():
+        if WARMUP() and _k.cast_sectors_loop.ready():
             c = self._cell(x, y)
             got = self._sector_cache.get(c)
             if got is None and c >= 0 and _k.sector_lists.ready():
@@ -386,7 +386,7 @@ class RayCaster:
 
     def clearance(self, x: float, y: float) -> float:
         """Distance (m) from a point to the nearest segment, or max range if none is nearer."""
-        if _warm() and _k.clearance_loop.ready():
+        if WARMUP() and _k.clearance_loop.ready():
             ids, lower = self._candidates(self._cell(x, y))
             return float(_k.clearance_loop(self.segments, ids, lower, x, y, self.max_range_m))
         return self.clearance_reference(x, y)
@@ -408,7 +408,7 @@ class RayCaster:
         dist = math.hypot(dx, dy)
         if dist == 0.0:
             return True
-        if _warm() and _k.blocked_loop.ready():
+        if WARMUP() and _k.blocked_loop.ready():
             ids, lower = self._candidates(self._cell(x0, y0) if dist <= self.max_range_m else -1)
             return not _k.blocked_loop(self.segments, ids, lower, x0, y0, dx / dist, dy / dist, dist)
         return self.visible_reference(x0, y0, x1, y1)

@@ -10,6 +10,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from lfdfuse.kernels.jit import Warmup
 from lfdfuse.world import raycast_kernel as _k
 
 _EPS = 1e-12
@@ -18,8 +19,7 @@ _BUILD_CHUNK = 1_000_000
 #: calls (casts, clearances, lines of sight) a process answers with the numpy reference before it
 #: loads the compiled loops: loading numba and its cached kernels costs about a second of CPU,
 #: more than a short run's calls take in numpy (the answers are the same either way)
-_WARMUP_CALLS = 1000
-_calls = [0]
+WARMUP = Warmup(1000)
 #: (segment, cell) pairs for which :func:`near_pairs` loads the compiled loop before that
 _COMPILED_PAIRS = 4_000_000
 
@@ -74,7 +74,7 @@ def near_pairs(
     start = 0
     # compiled once the process casts with the compiled loops, or when the pairs are so many
     # that loading them pays at once
-    compiled = (_calls[0] >= _WARMUP_CALLS or bool(n_seg) and int(ends[-1]) > _COMPILED_PAIRS) and (
+    compiled = (WARMUP.done or bool(n_seg) and int(ends[-1]) > _COMPILED_PAIRS) and (
         _k.near_pairs_loop.ready()
     )
     ni = np.maximum(i1 - i0 + 1, 0)
@@ -140,11 +140,3 @@ def _collinear(
     inside = (ta <= 0.0) & (tb >= 0.0) | (tb <= 0.0) & (ta >= 0.0)
     ahead = np.where(np.minimum(ta, tb) >= 0.0, np.minimum(ta, tb), np.inf)
     return np.where(collinear, np.where(inside, 0.0, ahead), out)
-
-
-def _warm() -> bool:
-    """True once this process has made enough calls for the compiled loops to pay."""
-    if _calls[0] < _WARMUP_CALLS:
-        _calls[0] += 1
-        return False
-    return True

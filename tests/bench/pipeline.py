@@ -35,7 +35,7 @@ from lfdfuse.world.raycast import RayCaster
 
 # the benchmarks time the compiled loops from the first call (a process otherwise answers its
 # first calls with the numpy references, as a short CLI run does)
-segments._WARMUP_CALLS = 0
+segments.WARMUP.left = 0
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,7 @@ MAPS = SHARED / "realdata" / "maps"
 @pytest.fixture(autouse=True)
 def _compiled_from_the_first_call(monkeypatch: pytest.MonkeyPatch) -> None:
     # cast() runs the compiled loops at once (cast_reference() the numpy bands): both are checked
-    monkeypatch.setattr(segments, "_WARMUP_CALLS", 0)
+    monkeypatch.setattr(segments.WARMUP, "left", 0)
 
 
 def brute_cast(seg: np.ndarray, x: float, y: float, angles: np.ndarray, max_range: float) -> np.ndarray:

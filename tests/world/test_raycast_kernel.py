@@ -26,7 +26,7 @@ MAPS = SHARED / "realdata" / "maps"
 @pytest.fixture(autouse=True)
 def _compiled(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.delenv(jit.MODE, raising=False)
-    monkeypatch.setattr(segments, "_WARMUP_CALLS", 0)  # compiled from the first call
+    monkeypatch.setattr(segments.WARMUP, "left", 0)  # compiled from the first call
     for k in (raycast_kernel.cast_loop, raycast_kernel.cast_sectors_loop, raycast_kernel.sector_lists):
         assert k.ready(), "numba is a dependency: the compiled raycaster must compile here"
 
@@ -191,8 +191,7 @@ def test_the_compiled_index_pairs_are_the_reference_pairs(
 
 
 def test_a_process_casts_in_numpy_until_the_compiled_loops_pay(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(segments, "_WARMUP_CALLS", 3)
-    monkeypatch.setattr(segments, "_calls", [0])
+    monkeypatch.setattr(segments.WARMUP, "left", 3)
     used: list[str] = []
     real = RayCaster.cast_reference
 
