@@ -36,10 +36,13 @@ test: warm
 # before the tests: byte-compiled (every command a test starts imports lfdfuse again, and where the
 # environment says PYTHONDONTWRITEBYTECODE each would compile its sources, ~0.2 s of CPU a process),
 # and numba's kernels compiled once into their cache, where each test process would compile them
-# again (nothing runs when the cache holds them); .ci/run does this beside the linter
+# again (nothing runs when the cache holds them); the test modules collected once with bytecode
+# written, so pytest's rewritten asserts are cached too (each worker would rewrite every test
+# module again, about 3 s of CPU each); .ci/run does this beside the linter
 warm: install
 	$(PY) -m compileall -q lfdfuse tests > /dev/null
 	$(PY) -m tests.support.warm
+	PYTHONDONTWRITEBYTECODE= $(PY) -m pytest --collect-only -q -p no:cacheprovider > /dev/null
 
 # the whole hostile corpus (tests/hostile; make test runs a sample of every class)
 fuzz: install
