@@ -107,13 +107,6 @@ def landmark_lags(table: FusionTable) -> list[float]:
     )
 
 
-def _has_landmark(net: Network) -> bool:
-    """Whether a step of ``net`` (or of a network nested in it) has a landmark."""
-    return any(
-        s.landmark is not None or (s.network is not None and _has_landmark(s.network)) for s in net.steps
-    )
-
-
 #: the cues of a tick where nothing is sensed (a table without landmarks)
 _NO_CUES = Cues()
 
@@ -173,7 +166,7 @@ class NetworkStepper:
         self._odom: tuple[float, float, float] | None = None
         #: whether any step of the table has a landmark: only a landmark decides from the cues
         #: (without one the runtime's progress is never read), so a table without any senses none
-        self._senses = _has_landmark(table.network)
+        self._senses = self.runtime.senses
         # what every tick reads of the layout and the targets, looked up once
         self._ahead0 = ahead_bearings(self.geometry)
         self._target_names = tuple(self.targets)

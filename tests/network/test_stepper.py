@@ -107,7 +107,7 @@ def _decisions(table: dict[str, Any], *, senses: bool, seconds: float = 20.0) ->
     world, sensors = load_world("building"), SensorParams()
     rng = np.random.default_rng(3)
     driver = NetworkStepper(table=parse_table(table), world=world, sensors=sensors, rng=rng)
-    driver._senses = senses  # what the stepper decides by itself: sense cues only for landmarks
+    driver._senses = driver.runtime.senses = senses  # what they decide themselves: only for landmarks
     seen: list[tuple[Any, ...]] = []
 
     class _Tap:
