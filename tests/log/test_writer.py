@@ -116,7 +116,9 @@ def _two_ways(
 @given(
     st.lists(
         st.tuples(
-            st.sampled_from(["/cmd_vel", "/scan", "/pose"]), st.integers(0, 2**63 - 1), st.binary(max_size=60)
+            st.sampled_from(["/cmd_vel", "/scan", "/pose"]),
+            st.one_of(st.integers(0, 3), st.integers(0, 2**63 - 1)),  # often a time again, as in a tick
+            st.binary(max_size=60),
         ),
         max_size=40,
     )
@@ -135,5 +137,22 @@ def test_messages_across_chunks_are_written_as_mcap_writes_them(
     blob = bytes(range(256)) * 40
     messages = [
         ("/scan" if k % 3 else "/pose", (k * 7919) % 5000, blob[: (k * 3) % 10_000]) for k in range(2500)
+    ]
+    _two_ways(tmp_path, monkeypatch, messages)
+
+
+def test_ticks_of_messages_at_one_time_across_chunks_are_written_as_mcap_writes_them(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # several messages a tick at one time, as a run writes them, over more than one chunk; a
+    # tick now and then earlier than the last (a copy of a file out of order)
+    blob = bytes(range(256)) * 40
+    messages = [
+        (
+            ("/scan", "/pose", "/cmd_vel")[k % 3],
+            10_000 + (k // 3) * 1000 - (5000 if k % 97 == 0 else 0),
+            blob[: (k * 7) % 9000],
+        )
+        for k in range(3000)
     ]
     _two_ways(tmp_path, monkeypatch, messages)
