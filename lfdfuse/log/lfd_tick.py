@@ -64,3 +64,60 @@ def fused_dict(t_ns: int, x: float, y: float, weights: dict[str, float]) -> dict
 def encode_fused_rounded(t_ns: int, x: float, y: float, rounded: dict[str, float]) -> bytes:
     """:func:`~lfdfuse.log.lfd.encode_fused` of weights rounded already (:func:`rounded_weights`)."""
     return orjson.dumps({"timestamp": stamp(t_ns), "x": x, "y": y, "weights": rounded})
+
+
+# --- the same bytes, spliced: what a run writes every tick, without a dict per field ----------
+#
+# orjson writes compact JSON (no spaces) and a number the same wherever it stands, so a message
+# is its fixed pieces (made once, by orjson) around the numbers of this tick, each as orjson
+# writes it in one list. The tests hold these against the dict encoders above.
+
+
+def stamp_head(t_ns: int) -> bytes:
+    """``{"timestamp":{...}`` as every message above begins (the integers as orjson writes them)."""
+    return b'{"timestamp":{"sec":%d,"nsec":%d}' % (t_ns // 1_000_000_000, t_ns % 1_000_000_000)
+
+
+def numbers(values: list[float]) -> list[bytes]:
+    """Each number of a flat list as orjson writes it (NaN and ±inf as ``null``)."""
+    return orjson.dumps(values)[1:-1].split(b",") if values else []
+
+
+_BOOLS = {
+    (a, g): b',"applicable":%s,"goal_met":%s}' % (orjson.dumps(a), orjson.dumps(g))
+    for a in (False, True)
+    for g in (False, True)
+}
+
+
+class BehaviorsEncoder:
+    """:func:`encode_behavior_lists` for one behaviour set (the same bytes), its names written once."""
+
+    def __init__(self, names: Sequence[str]) -> None:
+        self.names = tuple(names)
+        self._heads = [
+            b'%s{"name":%s,"x":' % (b"," if j else b"", orjson.dumps(n)) for j, n in enumerate(self.names)
+        ]
+
+    def encode(self, t_ns: int, xy: list[list[float]], applicable: list[bool], goal_met: list[bool]) -> bytes:
+        k = len(self.names)
+        if len(xy) != k or len(applicable) != k or len(goal_met) != k:
+            return encode_behavior_lists(t_ns, self.names, xy, applicable, goal_met)
+        flat = orjson.dumps(xy).replace(b"[", b"").replace(b"]", b"").split(b",") if k else []
+        if len(flat) != 2 * k:  # not (K, 2)
+            return encode_behavior_lists(t_ns, self.names, xy, applicable, goal_met)
+        parts = [stamp_head(t_ns), b',"behaviors":[']
+        bools = _BOOLS
+        for j, head in enumerate(self._heads):
+            parts += (head, flat[2 * j], b',"y":', flat[2 * j + 1], bools[applicable[j], goal_met[j]])
+        parts.append(b"]}")
+        return b"".join(parts)
+
+
+def tail_of(message: dict[str, Any]) -> bytes:
+    """The bytes of ``message`` (whose first field is its ``timestamp``) after the timestamp:
+    what follows :func:`stamp_head` in its message (``,...}``)."""
+    data = orjson.dumps(message)
+    head = len(orjson.dumps({"timestamp": message["timestamp"]})) - 1
+    assert data.startswith(b'{"timestamp":'), data[:40]
+    return data[head:]
