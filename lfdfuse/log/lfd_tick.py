@@ -83,35 +83,43 @@ def numbers(values: list[float]) -> list[bytes]:
     return orjson.dumps(values)[1:-1].split(b",") if values else []
 
 
-_BOOLS = {
-    (a, g): b',"applicable":%s,"goal_met":%s}' % (orjson.dumps(a), orjson.dumps(g))
-    for a in (False, True)
-    for g in (False, True)
-}
-
-
 class BehaviorsEncoder:
-    """:func:`encode_behavior_lists` for one behaviour set (the same bytes), its names written once."""
+    """:func:`encode_behavior_lists` for one behaviour set (the same bytes): the message as a
+    bytes format per pattern of applicability and goals met, made once (by orjson, of the
+    message with marked numbers) and filled in with this tick's numbers."""
 
     def __init__(self, names: Sequence[str]) -> None:
         self.names = tuple(names)
-        self._heads = [
-            b'%s{"name":%s,"x":' % (b"," if j else b"", orjson.dumps(n)) for j, n in enumerate(self.names)
-        ]
+        self._formats: dict[tuple[bool, ...], bytes] = {}
+
+    def _format(self, applicable: list[bool], goal_met: list[bool]) -> bytes:
+        k = len(self.names)
+        marks = [100_000.5 + i for i in range(2 * k)]  # each written once, after its key
+        xy = [marks[2 * j : 2 * j + 2] for j in range(k)]
+        data = orjson.dumps(behaviors_dict(0, self.names, xy, applicable, goal_met)).replace(b"%", b"%%")
+        head = orjson.dumps({"timestamp": stamp(0)})[1:-1]
+        assert data.startswith(b"{" + head)
+        data = b'{"timestamp":{"sec":%d,"nsec":%d}' + data[1 + len(head) :]
+        for i, mark in enumerate(marks):
+            key = b'"x":' if i % 2 == 0 else b'"y":'
+            data = data.replace(key + orjson.dumps(mark) + b",", key + b"%s,", 1)
+        return data
 
     def encode(self, t_ns: int, xy: list[list[float]], applicable: list[bool], goal_met: list[bool]) -> bytes:
+        """``applicable`` and ``goal_met`` as Python bools (a bool array's ``tolist()``)."""
         k = len(self.names)
         if len(xy) != k or len(applicable) != k or len(goal_met) != k:
             return encode_behavior_lists(t_ns, self.names, xy, applicable, goal_met)
         flat = orjson.dumps(xy).replace(b"[", b"").replace(b"]", b"").split(b",") if k else []
         if len(flat) != 2 * k:  # not (K, 2)
             return encode_behavior_lists(t_ns, self.names, xy, applicable, goal_met)
-        parts = [stamp_head(t_ns), b',"behaviors":[']
-        bools = _BOOLS
-        for j, head in enumerate(self._heads):
-            parts += (head, flat[2 * j], b',"y":', flat[2 * j + 1], bools[applicable[j], goal_met[j]])
-        parts.append(b"]}")
-        return b"".join(parts)
+        key = (*applicable, *goal_met)
+        fmt = self._formats.get(key)
+        if fmt is None:
+            if len(self._formats) >= 4096:
+                self._formats.clear()
+            fmt = self._formats[key] = self._format(applicable, goal_met)
+        return fmt % (t_ns // 1_000_000_000, t_ns % 1_000_000_000, *flat)
 
 
 def tail_of(message: dict[str, Any]) -> bytes:

@@ -115,10 +115,9 @@ def arrow_scene(t_ns: int, entity_id: str, arrows: Sequence[Arrow]) -> dict[str,
 #: every arrow's position in the robot frame
 _ARROW_AT = {"x": 0.0, "y": 0.0, "z": 0.3}
 
-#: the JSON of each colour :func:`encode_arrow_scene` drew lately
-_COLORS: dict[tuple[float, float, float], bytes] = {}
-#: per entity id, :func:`encode_arrow_scene`'s message around its timestamp and its arrows
-_FRAMES: dict[str, tuple[bytes, bytes, bytes]] = {}
+#: per entity id and sequence of arrow colours (by identity; the entry keeps the colours, so
+#: their ids stay theirs): the colours and :func:`encode_arrow_scene`'s message as a format
+_SCENES: dict[tuple[object, ...], tuple[tuple[object, ...], bytes]] = {}
 
 
 def _arrow(orientation: dict[str, float], shaft_m: float, color: dict[str, float]) -> dict[str, Any]:
@@ -133,70 +132,57 @@ def _arrow(orientation: dict[str, float], shaft_m: float, color: dict[str, float
     }
 
 
-def _arrow_pieces() -> tuple[bytes, ...]:
-    """An arrow's bytes around its orientation's z and w, its shaft length and its colour
-    (orjson's, of an arrow with marked numbers, cut at them)."""
-    data = orjson.dumps(_arrow({"x": 0.0, "y": 0.0, "z": 111.5, "w": 222.5}, 333.5, {"r": 444.5}))
+def _cut(data: bytes, *marks: bytes) -> list[bytes]:
+    """``data`` cut at each of ``marks`` in turn (each found once), as bytes formats (``%`` doubled)."""
     pieces = []
-    for mark in (b"111.5", b"222.5", b"333.5", b'{"r":444.5}'):
-        piece, data = data.split(mark)
-        pieces.append(piece)
-    return (*pieces, data)
+    for mark in marks:
+        piece, data = data.split(mark, 1)
+        pieces.append(piece.replace(b"%", b"%%"))
+    return [*pieces, data.replace(b"%", b"%%")]
 
 
-_ARROW = _arrow_pieces()
-
-
-def _frame(entity_id: str) -> tuple[bytes, bytes, bytes]:
-    """The bytes of :func:`arrow_scene_of`'s message before its timestamp, between it and the
-    arrows, and after them (orjson's, of the message without arrows, cut at both)."""
-    frame = _FRAMES.get(entity_id)
-    if frame is None:
-        ent = _entity(0, entity_id, ROBOT_FRAME, arrows=[])
-        ent["frame_locked"] = True
-        data = orjson.dumps({"deletions": [], "entities": [ent]})
-        stamp0 = b'"timestamp":' + orjson.dumps(stamp(0))
-        before, rest = data.split(stamp0, 1)
-        between, after = rest.split(b'"arrows":[]', 1)
-        if len(_FRAMES) >= 64:
-            _FRAMES.clear()
-        frame = _FRAMES[entity_id] = (before, between + b'"arrows":[', b"]" + after)
-    return frame
+def _scene_format(entity_id: str, colors: Sequence[tuple[float, ...]]) -> bytes:
+    """:func:`arrow_scene_of`'s message with arrows of ``colors`` as a bytes format: ``%d`` for
+    the timestamp's sec and nsec, then ``%s`` for each arrow's orientation z and w and its shaft
+    length (orjson's bytes of the message and of an arrow with marked numbers, cut at them)."""
+    ent = _entity(0, entity_id, ROBOT_FRAME, arrows=[])
+    ent["frame_locked"] = True
+    before, between, after = _cut(
+        orjson.dumps({"deletions": [], "entities": [ent]}),
+        b'"timestamp":' + orjson.dumps(stamp(0)),
+        b'"arrows":[]',
+    )
+    arrows = []
+    for color in colors:
+        marked = _arrow({"x": 0.0, "y": 0.0, "z": 111.5, "w": 222.5}, 333.5, _color(*color))
+        arrows.append(b"%s".join(_cut(orjson.dumps(marked), b"111.5", b"222.5", b"333.5")))
+    return b"".join(
+        (before, b'"timestamp":{"sec":%d,"nsec":%d}', between, b'"arrows":[', b",".join(arrows), b"]", after)
+    )
 
 
 def encode_arrow_scene(
     t_ns: int, entity_id: str, arrows: Sequence[tuple[float, float, tuple[float, float, float], float]]
 ) -> bytes:
-    """The JSON bytes of :func:`arrow_scene_of` (the same message), spliced: its fixed pieces
-    made once, the numbers of every arrow written by one ``orjson.dumps`` of them all."""
+    """The JSON bytes of :func:`arrow_scene_of` (the same message): its format made once per
+    sequence of colours, the numbers of every arrow written by one ``orjson.dumps`` of them all."""
     nums: list[float] = []
-    colors: list[bytes] = []
+    colors: list[tuple[float, float, float]] = []
     for vx, vy, color, scale_m in arrows:
         length = math.hypot(vx, vy) * scale_m
         if length <= 1e-6:
             continue
-        c = _COLORS.get(color)
-        if c is None:
-            if len(_COLORS) >= 256:
-                _COLORS.clear()
-            c = _COLORS[color] = orjson.dumps(_color(*color))
         half = math.atan2(vy, vx) / 2  # quat_z's z and w
         nums += (math.sin(half), math.cos(half), max(length - 0.1, 0.01))
-        colors.append(c)
-    before, between, after = _frame(entity_id)
-    parts = [
-        before,
-        b'"timestamp":{"sec":%d,"nsec":%d}' % (t_ns // 1_000_000_000, t_ns % 1_000_000_000),
-        between,
-    ]
-    z_, w_, shaft, color_, end = _ARROW
+        colors.append(color)
+    key = (entity_id, *map(id, colors))
+    known = _SCENES.get(key)
+    if known is None:
+        if len(_SCENES) >= 1024:
+            _SCENES.clear()
+        known = _SCENES[key] = (tuple(colors), _scene_format(entity_id, colors))
     written = orjson.dumps(nums)[1:-1].split(b",") if nums else []
-    for i, c in enumerate(colors):
-        if i:
-            parts.append(b",")
-        parts += (z_, written[3 * i], w_, written[3 * i + 1], shaft, written[3 * i + 2], color_, c, end)
-    parts.append(after)
-    return b"".join(parts)
+    return known[1] % (t_ns // 1_000_000_000, t_ns % 1_000_000_000, *written)
 
 
 def arrow_scene_of(
