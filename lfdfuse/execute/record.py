@@ -76,11 +76,8 @@ class LfdRecorder:
         names = driver.table.behaviors
         xy = out.vectors[0].round(6).tolist()  # Python floats: the same numbers as float(vec[j, i])
         applicable = out.applicable[0].tolist()
-        log = self.log
         head = lfd_tick.stamp_head(t_ns)
-        log.write_raw(
-            "/lfd/behaviors", t_ns, self.behaviors.encode(t_ns, xy, applicable, out.goal_met[0].tolist())
-        )
+        tick = [("/lfd/behaviors", self.behaviors.encode(t_ns, xy, applicable, out.goal_met[0].tolist()))]
         key = (dec.bac, tuple(applicable))
         bac = self._bacs.get(key)
         if bac is None:
@@ -89,10 +86,10 @@ class LfdRecorder:
             bac = self._bacs[key] = lfd_tick.tail_of(
                 lfd_tick.bac_dict(t_ns, dec.bac, [n for j, n in enumerate(names) if applicable[j]])
             )
-        log.write_raw("/lfd/bac", t_ns, head + bac)
+        tick.append(("/lfd/bac", head + bac))
         step = dec.step
         achieved = self._achieved_goals()
-        made_of = (dec.path if step is not None else None, dec.bac, dec.unseen, len(achieved), achieved)
+        made_of = (dec.path if step is not None else None, dec.bac, dec.unseen, achieved)
         if self._step[0] != made_of:
             self._step = (
                 made_of,
@@ -107,15 +104,12 @@ class LfdRecorder:
                     )
                 ),
             )
-        log.write_raw("/lfd/step", t_ns, head + self._step[1])
+        tick.append(("/lfd/step", head + self._step[1]))
         fx, fy = dec.fused.tolist()
         weights, colors = dec.weights, self.colors
         x, y = lfd_tick.numbers([fx, fy])
-        log.write_raw(
-            "/lfd/fused",
-            t_ns,
-            b"".join((head, b',"x":', x, b',"y":', y, b',"weights":', self._rounded_json(weights), b"}")),
-        )
+        fused = b"".join((head, b',"x":', x, b',"y":', y, b',"weights":', self._rounded_json(weights), b"}"))
+        tick.append(("/lfd/fused", fused))
         arrows = [
             # the behaviour's colour in every figure
             (weights[n] * xy[j][0], weights[n] * xy[j][1], colors[n], 1.5)
@@ -123,9 +117,8 @@ class LfdRecorder:
             if applicable[j] and n in weights
         ]
         arrows.append((fx, fy, (1.0, 1.0, 1.0), 1.5))
-        log.write_raw("/lfd/overlay", t_ns, msg.encode_arrow_scene(t_ns, "fusion", arrows))
+        tick.append(("/lfd/overlay", msg.encode_arrow_scene(t_ns, "fusion", arrows)))
         ask = driver.help_now
         if ask is not None:
-            log.write_raw(
-                "/lfd/network", t_ns, lfd.encode_help(t_ns, step=ask.step, bac=ask.bac, why=ask.why)
-            )
+            tick.append(("/lfd/network", lfd.encode_help(t_ns, step=ask.step, bac=ask.bac, why=ask.why)))
+        self.log.write_tick(t_ns, tick)

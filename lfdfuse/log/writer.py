@@ -6,6 +6,7 @@ import itertools
 import os
 import struct
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import Any, BinaryIO
@@ -88,6 +89,41 @@ class _Messages:
         )
         if at + 31 + len(data) > self.limit:  # the head is 31 bytes
             self.finalize()
+
+    def add_tick(self, t_ns: int, entries: list[tuple[int, int, bytes]]) -> None:
+        """:meth:`add` of each ``(channel, sequence, data)`` at ``t_ns`` in turn (the same bytes and
+        chunks), written in one piece up to the message that fills a chunk, and so on."""
+        stats, chunk = self.stats, self.chunk
+        if t_ns != self.last_ns or chunk.num_messages == 0:
+            channel_id, sequence, data = entries[0]
+            self.add(channel_id, t_ns, data, sequence)  # the times updated, as one message does
+            if len(entries) > 1:
+                self.add_tick(t_ns, entries[1:])
+            return
+        counts, indices = stats.channel_message_counts, chunk.message_indices
+        buffer = chunk.record_writer._buffer
+        at = buffer.tell()
+        parts: list[bytes] = []
+        head = _MESSAGE_HEAD.pack
+        for i, (channel_id, sequence, data) in enumerate(entries):
+            counts[channel_id] += 1
+            index = indices.get(channel_id)
+            if index is None:
+                index = indices[channel_id] = _Index(channel_id=channel_id, records=[])
+            index.records.append((t_ns, at))
+            parts += (head(_MESSAGE_OPCODE, 22 + len(data), channel_id, sequence, t_ns, t_ns), data)
+            at += 31 + len(data)  # the head is 31 bytes
+            if at > self.limit:  # this message fills the chunk: the rest go into the next
+                stats.message_count += i + 1
+                chunk.num_messages += i + 1
+                buffer.write(b"".join(parts))
+                self.finalize()
+                if i + 1 < len(entries):
+                    self.add_tick(t_ns, entries[i + 1 :])
+                return
+        stats.message_count += len(entries)
+        chunk.num_messages += len(entries)
+        buffer.write(b"".join(parts))
 
 
 class _Index(MessageIndex):
@@ -181,6 +217,28 @@ class LogWriter:
             self._messages.add(ch, t_ns, data, seq)
         else:
             self._writer.add_message(channel_id=ch, log_time=t_ns, publish_time=t_ns, data=data, sequence=seq)
+
+    def write_tick(self, t_ns: int, messages: Sequence[tuple[str, bytes]]) -> None:
+        """:meth:`write_raw` of each ``(topic, data)`` at ``t_ns``, in order (the same bytes)."""
+        assert self._writer is not None, "LogWriter used outside its with-block"
+        if self._messages is None or not messages:
+            for topic, data in messages:
+                self.write_raw(topic, t_ns, data)
+            return
+        channels, seqs, add_tick = self._channels, self._seq, self._messages.add_tick
+        entries: list[tuple[int, int, bytes]] = []
+        for topic, data in messages:
+            ch = channels.get(topic)
+            if ch is None:  # a new channel: its record goes into the chunk before this message
+                if entries:
+                    add_tick(t_ns, entries)
+                    entries = []
+                self.write_raw(topic, t_ns, data)
+                continue
+            seq = seqs[topic] = seqs[topic] + 1
+            entries.append((ch, seq, data))
+        if entries:
+            add_tick(t_ns, entries)
 
     def copy(self, raw: RawMessage) -> None:
         """Write a message read from another file, keeping its channel and schema as they were."""

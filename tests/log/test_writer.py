@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import mcap.writer
@@ -98,18 +99,24 @@ def test_a_writer_interrupted_as_it_opens_leaves_no_temp_file(
 def _two_ways(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, messages: list[tuple[str, int, bytes]]
 ) -> None:
-    """The one-step message path writes the bytes mcap's public ``add_message`` writes."""
+    """The one-step message path (a message at a time, and the messages of one time together,
+    as a tick writes them) writes the bytes mcap's public ``add_message`` writes."""
     files = []
-    for fast in (True, False):
-        if not fast:
+    for way in ("one by one", "ticks", "mcap"):
+        if way == "mcap":
             monkeypatch.setattr(writer._Messages, "of", classmethod(lambda cls, w: None))
-        path = tmp_path / f"{fast}.mcap"
+        path = tmp_path / f"{len(files)}.mcap"
         with LogWriter(path, metadata={"seed": "1"}) as log:
-            assert (log._messages is not None) == fast
-            for topic, t, data in messages:
-                log.write_raw(topic, t, data)
+            assert (log._messages is not None) == (way != "mcap")
+            if way == "ticks":
+                for t, tick in itertools.groupby(messages, key=lambda m: m[1]):
+                    log.write_tick(t, [(topic, data) for topic, _, data in tick])
+            else:
+                for topic, t, data in messages:
+                    log.write_raw(topic, t, data)
         files.append(path.read_bytes())
-    assert files[0] == files[1]
+    assert files[0] == files[2]
+    assert files[1] == files[2]
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
