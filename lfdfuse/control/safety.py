@@ -49,7 +49,8 @@ def free_heading(
     """The free robot-frame heading nearest ``rel_rad`` (see the module docstring).
 
     The wanted heading's test runs compiled where it can (:data:`BLOCKED`: the cosines and sines
-    numpy's, the same products and comparisons); the rest, and every test without numba, is
+    numpy's, the same products and comparisons), and a blocked heading's candidates are then
+    tested a block at a time (:func:`_nearest_free`); every test without numba is
     :func:`free_heading_reference`."""
     if (
         type(ranges_m) is np.ndarray
@@ -63,7 +64,32 @@ def free_heading(
         d1 = angles_rad - rel_rad
         if not BLOCKED(ranges_m, np.cos(d1), np.sin(d1), p.lookahead_m, p.halfwidth_m):
             return rel_rad
+        return _nearest_free(rel_rad, ranges_m, angles_rad, p)
     return free_heading_reference(rel_rad, ranges_m, angles_rad, p)
+
+
+#: candidate headings :func:`_nearest_free` tests at a time
+_BLOCK = 8
+
+
+def _nearest_free(rel_rad: float, ranges_m: np.ndarray, angles_rad: np.ndarray, p: SafetyParams) -> float:
+    """:func:`free_heading_reference` of a blocked heading, its candidates tested a block at a
+    time, nearest first, until one is free (the same arrays, row for row: the same numbers)."""
+    r1 = np.where(np.isfinite(ranges_m) & (ranges_m > 0), ranges_m, 0.0)
+    offsets = np.radians(np.arange(p.step_deg, 90.0 + 1e-9, p.step_deg))
+    first, second = (-offsets, offsets) if rel_rad < 0 else (offsets, -offsets)
+    cands = np.concatenate([[rel_rad], rel_rad + np.column_stack([first, second]).ravel()])
+    r = r1[None, :]
+    for lo in range(0, len(cands), _BLOCK):
+        block = cands[lo : lo + _BLOCK]
+        diff = angles_rad[None, :] - block[:, None]
+        along = r * np.cos(diff)
+        lateral = np.abs(r * np.sin(diff))
+        blocked = ((along > 0) & (along < p.lookahead_m) & (lateral < p.halfwidth_m)).any(axis=1)
+        free = np.nonzero(~blocked)[0]
+        if len(free):
+            return float(block[free[0]])
+    return math.copysign(math.pi / 2 + 0.3, rel_rad if rel_rad != 0.0 else 1.0)
 
 
 def free_heading_reference(

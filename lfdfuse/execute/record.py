@@ -9,7 +9,7 @@ row for, or an unidentifiable row).
 
 from __future__ import annotations
 
-import operator
+import orjson
 
 from lfdfuse.behaviors import catalogue
 from lfdfuse.log import lfd, lfd_tick
@@ -20,7 +20,11 @@ from lfdfuse.robot.readings import Observation
 
 
 class LfdRecorder:
-    """Logs the network's decision of every tick on the ``/lfd/*`` channels of DESIGN §5."""
+    """Logs the network's decision of every tick on the ``/lfd/*`` channels of DESIGN §5.
+
+    The bytes are the codecs' (:mod:`lfdfuse.log.lfd`), spliced from pieces made once where a
+    message repeats from tick to tick but for its timestamp (:mod:`lfdfuse.log.lfd_tick`).
+    """
 
     def __init__(self, log: LogWriter, driver: NetworkStepper) -> None:
         self.log = log
@@ -29,26 +33,40 @@ class LfdRecorder:
         self.colors = {n: catalogue.rgb(n) for n in driver.table.behaviors}
         for topic, schema in lfd.EXECUTE_TOPICS.items():
             log.add_topic(topic, schema)
-        #: the last tick's weights (their names in order and the very number objects) and as
-        #: ``/lfd/fused`` rounds them
-        self._names: tuple[str, ...] = ()
-        self._values: tuple[float, ...] = ()
-        self._rounded_weights: dict[str, float] = {}
+        self.behaviors = lfd_tick.BehaviorsEncoder(driver.table.behaviors)
+        #: per set of weights (their names in order and the ids of their very number objects):
+        #: the numbers, and the JSON of them as ``/lfd/fused`` rounds them
+        self._weights: dict[tuple[object, ...], tuple[tuple[float, ...], bytes]] = {}
+        #: ``/lfd/bac`` after its timestamp, per BAC and applicability
+        self._bacs: dict[tuple[int, tuple[bool, ...]], bytes] = {}
+        #: ``/lfd/step`` after its timestamp as of the last tick, and what it was made of
+        self._step: tuple[object, bytes] = (None, b"")
+        #: the goals achieved so far (``driver.reached``'s, as of its length then)
+        self._achieved: tuple[int, list[str]] = (0, [])
 
-    def _rounded(self, weights: dict[str, float]) -> dict[str, float]:
-        """``weights`` rounded as :func:`~lfdfuse.log.lfd.encode_fused` rounds them; the last
-        tick's rounding again where the weights are the last tick's: the same names in the same
-        order holding the same number objects (a decision copies its row's dict, not its numbers)."""
-        names, values = tuple(weights), tuple(weights.values())
-        if (
-            names == self._names
-            and len(values) == len(self._values)
-            and all(map(operator.is_, values, self._values))
-        ):
-            return self._rounded_weights
-        self._names, self._values = names, values
-        self._rounded_weights = lfd_tick.rounded_weights(weights)
-        return self._rounded_weights
+    def _rounded_json(self, weights: dict[str, float]) -> bytes:
+        """The JSON of ``weights`` rounded as :func:`~lfdfuse.log.lfd.encode_fused` rounds them;
+        made once per set of weights: the same names in the same order holding the same number
+        objects (a decision copies its row's dict, not its numbers; the entry keeps the numbers,
+        so their ids stay theirs)."""
+        key = (*weights, *map(id, weights.values()))
+        known = self._weights.get(key)
+        if known is None:
+            if len(self._weights) >= 1024:
+                self._weights.clear()
+            known = self._weights[key] = (
+                tuple(weights.values()),
+                orjson.dumps(lfd_tick.rounded_weights(weights)),
+            )
+        return known[1]
+
+    def _achieved_goals(self) -> list[str]:
+        reached = self.driver.reached
+        n, goals = self._achieved
+        if n != len(reached):
+            goals = [g for g, _ in reached]
+            self._achieved = (len(reached), goals)
+        return goals
 
     def record(self, obs: Observation, command: tuple[float, float]) -> None:
         driver = self.driver
@@ -58,31 +76,40 @@ class LfdRecorder:
         names = driver.table.behaviors
         xy = out.vectors[0].round(6).tolist()  # Python floats: the same numbers as float(vec[j, i])
         applicable = out.applicable[0].tolist()
-        log = self.log
-        log.write_raw(
-            "/lfd/behaviors",
-            t_ns,
-            lfd_tick.encode_behavior_lists(t_ns, names, xy, applicable, out.goal_met[0].tolist()),
-        )
-        log.write_raw(
-            "/lfd/bac", t_ns, lfd.encode_bac(t_ns, dec.bac, [n for j, n in enumerate(names) if applicable[j]])
-        )
+        head = lfd_tick.stamp_head(t_ns)
+        tick = [("/lfd/behaviors", self.behaviors.encode(t_ns, xy, applicable, out.goal_met[0].tolist()))]
+        key = (dec.bac, tuple(applicable))
+        bac = self._bacs.get(key)
+        if bac is None:
+            if len(self._bacs) >= 4096:
+                self._bacs.clear()
+            bac = self._bacs[key] = lfd_tick.tail_of(
+                lfd_tick.bac_dict(t_ns, dec.bac, [n for j, n in enumerate(names) if applicable[j]])
+            )
+        tick.append(("/lfd/bac", head + bac))
         step = dec.step
-        log.write_raw(
-            "/lfd/step",
-            t_ns,
-            lfd.encode_step(
-                t_ns,
-                step=driver.step_name(dec.path) if step is not None else None,
-                goal=step.goal if step is not None else None,
-                bac=dec.bac,
-                default_weights=dec.unseen,
-                achieved=[g for g, _ in driver.reached],
-            ),
-        )
+        achieved = self._achieved_goals()
+        made_of = (dec.path if step is not None else None, dec.bac, dec.unseen, achieved)
+        if self._step[0] != made_of:
+            self._step = (
+                made_of,
+                lfd_tick.tail_of(
+                    lfd_tick.step_dict(
+                        t_ns,
+                        step=driver.step_name(dec.path) if step is not None else None,
+                        goal=step.goal if step is not None else None,
+                        bac=dec.bac,
+                        default_weights=dec.unseen,
+                        achieved=achieved,
+                    )
+                ),
+            )
+        tick.append(("/lfd/step", head + self._step[1]))
         fx, fy = dec.fused.tolist()
         weights, colors = dec.weights, self.colors
-        log.write_raw("/lfd/fused", t_ns, lfd_tick.encode_fused_rounded(t_ns, fx, fy, self._rounded(weights)))
+        x, y = lfd_tick.numbers([fx, fy])
+        fused = b"".join((head, b',"x":', x, b',"y":', y, b',"weights":', self._rounded_json(weights), b"}"))
+        tick.append(("/lfd/fused", fused))
         arrows = [
             # the behaviour's colour in every figure
             (weights[n] * xy[j][0], weights[n] * xy[j][1], colors[n], 1.5)
@@ -90,9 +117,8 @@ class LfdRecorder:
             if applicable[j] and n in weights
         ]
         arrows.append((fx, fy, (1.0, 1.0, 1.0), 1.5))
-        log.write_raw("/lfd/overlay", t_ns, msg.encode_arrow_scene(t_ns, "fusion", arrows))
+        tick.append(("/lfd/overlay", msg.encode_arrow_scene(t_ns, "fusion", arrows)))
         ask = driver.help_now
         if ask is not None:
-            log.write_raw(
-                "/lfd/network", t_ns, lfd.encode_help(t_ns, step=ask.step, bac=ask.bac, why=ask.why)
-            )
+            tick.append(("/lfd/network", lfd.encode_help(t_ns, step=ask.step, bac=ask.bac, why=ask.why)))
+        self.log.write_tick(t_ns, tick)

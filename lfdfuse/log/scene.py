@@ -115,38 +115,74 @@ def arrow_scene(t_ns: int, entity_id: str, arrows: Sequence[Arrow]) -> dict[str,
 #: every arrow's position in the robot frame
 _ARROW_AT = {"x": 0.0, "y": 0.0, "z": 0.3}
 
-#: the colour objects of :func:`encode_arrow_scene`, one per colour (its messages never escape)
-_COLORS: dict[tuple[float, float, float], dict[str, float]] = {}
+#: per entity id and sequence of arrow colours (by identity; the entry keeps the colours, so
+#: their ids stay theirs): the colours and :func:`encode_arrow_scene`'s message as a format
+_SCENES: dict[tuple[object, ...], tuple[tuple[object, ...], bytes]] = {}
+
+
+def _arrow(orientation: dict[str, float], shaft_m: float, color: dict[str, float]) -> dict[str, Any]:
+    """An arrow primitive of the overlay (at :data:`_ARROW_AT`)."""
+    return {
+        "pose": {"position": dict(_ARROW_AT), "orientation": orientation},
+        "shaft_length": shaft_m,
+        "shaft_diameter": 0.03,
+        "head_length": 0.1,
+        "head_diameter": 0.08,
+        "color": color,
+    }
+
+
+def _cut(data: bytes, *marks: bytes) -> list[bytes]:
+    """``data`` cut at each of ``marks`` in turn (each found once), as bytes formats (``%`` doubled)."""
+    pieces = []
+    for mark in marks:
+        piece, data = data.split(mark, 1)
+        pieces.append(piece.replace(b"%", b"%%"))
+    return [*pieces, data.replace(b"%", b"%%")]
+
+
+def _scene_format(entity_id: str, colors: Sequence[tuple[float, ...]]) -> bytes:
+    """:func:`arrow_scene_of`'s message with arrows of ``colors`` as a bytes format: ``%d`` for
+    the timestamp's sec and nsec, then ``%s`` for each arrow's orientation z and w and its shaft
+    length (orjson's bytes of the message and of an arrow with marked numbers, cut at them)."""
+    ent = _entity(0, entity_id, ROBOT_FRAME, arrows=[])
+    ent["frame_locked"] = True
+    before, between, after = _cut(
+        orjson.dumps({"deletions": [], "entities": [ent]}),
+        b'"timestamp":' + orjson.dumps(stamp(0)),
+        b'"arrows":[]',
+    )
+    arrows = []
+    for color in colors:
+        marked = _arrow({"x": 0.0, "y": 0.0, "z": 111.5, "w": 222.5}, 333.5, _color(*color))
+        arrows.append(b"%s".join(_cut(orjson.dumps(marked), b"111.5", b"222.5", b"333.5")))
+    return b"".join(
+        (before, b'"timestamp":{"sec":%d,"nsec":%d}', between, b'"arrows":[', b",".join(arrows), b"]", after)
+    )
 
 
 def encode_arrow_scene(
     t_ns: int, entity_id: str, arrows: Sequence[tuple[float, float, tuple[float, float, float], float]]
 ) -> bytes:
-    """The JSON bytes of :func:`arrow_scene_of` (the same message): its position and colour
-    objects shared between arrows and messages, as the message is serialised at once."""
-    prims = []
+    """The JSON bytes of :func:`arrow_scene_of` (the same message): its format made once per
+    sequence of colours, the numbers of every arrow written by one ``orjson.dumps`` of them all."""
+    nums: list[float] = []
+    colors: list[tuple[float, float, float]] = []
     for vx, vy, color, scale_m in arrows:
         length = math.hypot(vx, vy) * scale_m
         if length <= 1e-6:
             continue
-        c = _COLORS.get(color)
-        if c is None:
-            if len(_COLORS) >= 256:
-                _COLORS.clear()
-            c = _COLORS[color] = _color(*color)
-        prims.append(
-            {
-                "pose": {"position": _ARROW_AT, "orientation": quat_z(math.atan2(vy, vx))},
-                "shaft_length": max(length - 0.1, 0.01),
-                "shaft_diameter": 0.03,
-                "head_length": 0.1,
-                "head_diameter": 0.08,
-                "color": c,
-            }
-        )
-    ent = _entity(t_ns, entity_id, ROBOT_FRAME, arrows=prims)
-    ent["frame_locked"] = True
-    return orjson.dumps({"deletions": [], "entities": [ent]})
+        half = math.atan2(vy, vx) / 2  # quat_z's z and w
+        nums += (math.sin(half), math.cos(half), max(length - 0.1, 0.01))
+        colors.append(color)
+    key = (entity_id, *map(id, colors))
+    known = _SCENES.get(key)
+    if known is None:
+        if len(_SCENES) >= 1024:
+            _SCENES.clear()
+        known = _SCENES[key] = (tuple(colors), _scene_format(entity_id, colors))
+    written = orjson.dumps(nums)[1:-1].split(b",") if nums else []
+    return known[1] % (t_ns // 1_000_000_000, t_ns % 1_000_000_000, *written)
 
 
 def arrow_scene_of(
@@ -158,16 +194,7 @@ def arrow_scene_of(
         length = math.hypot(vx, vy) * scale_m
         if length <= 1e-6:
             continue
-        prims.append(
-            {
-                "pose": {"position": dict(_ARROW_AT), "orientation": quat_z(math.atan2(vy, vx))},
-                "shaft_length": max(length - 0.1, 0.01),
-                "shaft_diameter": 0.03,
-                "head_length": 0.1,
-                "head_diameter": 0.08,
-                "color": _color(*color),
-            }
-        )
+        prims.append(_arrow(quat_z(math.atan2(vy, vx)), max(length - 0.1, 0.01), _color(*color)))
     ent = _entity(t_ns, entity_id, ROBOT_FRAME, arrows=prims)
     ent["frame_locked"] = True
     return {"deletions": [], "entities": [ent]}

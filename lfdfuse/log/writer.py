@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import itertools
 import os
 import struct
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import Any, BinaryIO
@@ -24,6 +26,9 @@ __all__ = ["PROVENANCE", "LogWriter"]
 #: a Message record's head: opcode, record length, channel, sequence, log time, publish time
 _MESSAGE_HEAD = struct.Struct("<BQHIQQ")
 _MESSAGE_OPCODE = 0x05
+#: a MessageIndex record's head: opcode, record length, channel, length of the records
+_INDEX_HEAD = struct.Struct("<BQHI")
+_INDEX_OPCODE = 0x07
 
 
 class _Messages:
@@ -40,6 +45,7 @@ class _Messages:
         self.chunk = writer._Writer__chunk_builder  # type: ignore[attr-defined]
         self.limit = writer._Writer__chunk_size  # type: ignore[attr-defined]
         self.finalize = writer._Writer__finalize_chunk  # type: ignore[attr-defined]
+        self.last_ns: int | None = None  # the time of the last message added
         buffer = self.chunk.record_writer._buffer
         assert hasattr(buffer, "write") and hasattr(buffer, "tell")
         assert isinstance(self.chunk.message_indices, dict) and isinstance(self.chunk.num_messages, int)
@@ -56,30 +62,78 @@ class _Messages:
         self, channel_id: int, t_ns: int, data: bytes, sequence: int, publish_ns: int | None = None
     ) -> None:
         stats, chunk = self.stats, self.chunk
-        # the min and max of the times so far, as comparisons (integers: the same numbers)
-        if stats.message_count == 0 or t_ns < stats.message_start_time:
-            stats.message_start_time = t_ns
-        if t_ns > stats.message_end_time:
-            stats.message_end_time = t_ns
+        if t_ns != self.last_ns or chunk.num_messages == 0:
+            # the min and max of the times so far, as comparisons (integers: the same numbers);
+            # a message at the time of the last one in this chunk changes none of them
+            if stats.message_count == 0 or t_ns < stats.message_start_time:
+                stats.message_start_time = t_ns
+            if t_ns > stats.message_end_time:
+                stats.message_end_time = t_ns
+            if chunk.num_messages == 0 or t_ns < chunk.message_start_time:
+                chunk.message_start_time = t_ns
+            if t_ns > chunk.message_end_time:
+                chunk.message_end_time = t_ns
+            self.last_ns = t_ns
         stats.channel_message_counts[channel_id] += 1
         stats.message_count += 1
-        if chunk.num_messages == 0 or t_ns < chunk.message_start_time:
-            chunk.message_start_time = t_ns
-        if t_ns > chunk.message_end_time:
-            chunk.message_end_time = t_ns
         buffer = chunk.record_writer._buffer
+        at = buffer.tell()
         index = chunk.message_indices.get(channel_id)
         if index is None:
-            index = chunk.message_indices[channel_id] = MessageIndex(channel_id=channel_id, records=[])
-        index.records.append((t_ns, buffer.tell()))
+            index = chunk.message_indices[channel_id] = _Index(channel_id=channel_id, records=[])
+        index.records.append((t_ns, at))
         chunk.num_messages += 1
         published = t_ns if publish_ns is None else publish_ns
         buffer.write(
-            _MESSAGE_HEAD.pack(_MESSAGE_OPCODE, 22 + len(data), channel_id, sequence, t_ns, published)
+            _MESSAGE_HEAD.pack(_MESSAGE_OPCODE, 22 + len(data), channel_id, sequence, t_ns, published) + data
         )
-        buffer.write(data)
-        if buffer.tell() > self.limit:
+        if at + 31 + len(data) > self.limit:  # the head is 31 bytes
             self.finalize()
+
+    def add_tick(self, t_ns: int, entries: list[tuple[int, int, bytes]]) -> None:
+        """:meth:`add` of each ``(channel, sequence, data)`` at ``t_ns`` in turn (the same bytes and
+        chunks), written in one piece up to the message that fills a chunk, and so on."""
+        stats, chunk = self.stats, self.chunk
+        if t_ns != self.last_ns or chunk.num_messages == 0:
+            channel_id, sequence, data = entries[0]
+            self.add(channel_id, t_ns, data, sequence)  # the times updated, as one message does
+            if len(entries) > 1:
+                self.add_tick(t_ns, entries[1:])
+            return
+        counts, indices = stats.channel_message_counts, chunk.message_indices
+        buffer = chunk.record_writer._buffer
+        at = buffer.tell()
+        parts: list[bytes] = []
+        head = _MESSAGE_HEAD.pack
+        for i, (channel_id, sequence, data) in enumerate(entries):
+            counts[channel_id] += 1
+            index = indices.get(channel_id)
+            if index is None:
+                index = indices[channel_id] = _Index(channel_id=channel_id, records=[])
+            index.records.append((t_ns, at))
+            parts += (head(_MESSAGE_OPCODE, 22 + len(data), channel_id, sequence, t_ns, t_ns), data)
+            at += 31 + len(data)  # the head is 31 bytes
+            if at > self.limit:  # this message fills the chunk: the rest go into the next
+                stats.message_count += i + 1
+                chunk.num_messages += i + 1
+                buffer.write(b"".join(parts))
+                self.finalize()
+                if i + 1 < len(entries):
+                    self.add_tick(t_ns, entries[i + 1 :])
+                return
+        stats.message_count += len(entries)
+        chunk.num_messages += len(entries)
+        buffer.write(b"".join(parts))
+
+
+class _Index(MessageIndex):
+    """A chunk's index of one channel's messages: :meth:`MessageIndex.write`'s bytes in two
+    writes instead of two per message (a chunk of a long run indexes tens of thousands)."""
+
+    def write(self, stream: Any) -> None:
+        n = len(self.records)
+        stream.write(_INDEX_HEAD.pack(_INDEX_OPCODE, 6 + 16 * n, self.channel_id, 16 * n))
+        stream.write(struct.pack(f"<{2 * n}Q", *itertools.chain.from_iterable(self.records)))
 
 
 class LogWriter:
@@ -163,6 +217,28 @@ class LogWriter:
             self._messages.add(ch, t_ns, data, seq)
         else:
             self._writer.add_message(channel_id=ch, log_time=t_ns, publish_time=t_ns, data=data, sequence=seq)
+
+    def write_tick(self, t_ns: int, messages: Sequence[tuple[str, bytes]]) -> None:
+        """:meth:`write_raw` of each ``(topic, data)`` at ``t_ns``, in order (the same bytes)."""
+        assert self._writer is not None, "LogWriter used outside its with-block"
+        if self._messages is None or not messages:
+            for topic, data in messages:
+                self.write_raw(topic, t_ns, data)
+            return
+        channels, seqs, add_tick = self._channels, self._seq, self._messages.add_tick
+        entries: list[tuple[int, int, bytes]] = []
+        for topic, data in messages:
+            ch = channels.get(topic)
+            if ch is None:  # a new channel: its record goes into the chunk before this message
+                if entries:
+                    add_tick(t_ns, entries)
+                    entries = []
+                self.write_raw(topic, t_ns, data)
+                continue
+            seq = seqs[topic] = seqs[topic] + 1
+            entries.append((ch, seq, data))
+        if entries:
+            add_tick(t_ns, entries)
 
     def copy(self, raw: RawMessage) -> None:
         """Write a message read from another file, keeping its channel and schema as they were."""

@@ -67,6 +67,9 @@ class NetworkRuntime:
         self._complete_at: tuple[int, bool] | None = None
         #: what the active step has sensed since it began (its landmark decides from this)
         self.progress = Progress.fresh(0.0, _lag_of(self.active()))
+        #: whether a step has a landmark: only a landmark decides from the cues (without one,
+        #: nothing reads the progress, and it is not kept)
+        self.senses = _has_landmark(table.network)
 
     def active(self) -> tuple[Path, Step] | None:
         """The active fusion step, depth first; None when every goal is achieved."""
@@ -121,7 +124,8 @@ class NetworkRuntime:
         ``cues`` the landmark cues of this tick (openings, odometry; None: nothing sensed)."""
         achieved_now: list[str] = []
         cues = cues or Cues()
-        self.progress.add(cues)
+        if self.senses:
+            self.progress.add(cues)
         found = self.active()
         while found is not None:
             done = self._achieved_by(found[0], reached)
@@ -223,6 +227,13 @@ class NetworkRuntime:
             x += w * vx
             y += w * vy
         return x, y
+
+
+def _has_landmark(net: Network) -> bool:
+    """Whether a step of ``net`` (or of a network nested in it) has a landmark."""
+    return any(
+        s.landmark is not None or (s.network is not None and _has_landmark(s.network)) for s in net.steps
+    )
 
 
 def _lag_of(found: tuple[Path, Step] | None) -> float | None:

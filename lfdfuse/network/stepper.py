@@ -107,6 +107,9 @@ def landmark_lags(table: FusionTable) -> list[float]:
     )
 
 
+#: the cues of a tick where nothing is sensed (a table without landmarks)
+_NO_CUES = Cues()
+
 #: a heading this far to a side turns the robot (nearly) on the spot: the speed falls with cos θ
 _ON_THE_SPOT_RAD = math.radians(85.0)
 
@@ -161,6 +164,9 @@ class NetworkStepper:
             for lag in landmark_lags(table)
         ]
         self._odom: tuple[float, float, float] | None = None
+        #: whether any step of the table has a landmark: only a landmark decides from the cues
+        #: (without one the runtime's progress is never read), so a table without any senses none
+        self._senses = self.runtime.senses
         # what every tick reads of the layout and the targets, looked up once
         self._ahead0 = ahead_bearings(self.geometry)
         self._target_names = tuple(self.targets)
@@ -261,7 +267,7 @@ class NetworkStepper:
         outputs = compute(obs, self.table.behaviors, self.params, self.behavior_state)
         reach = self.sensors.camera
         reached = {d.name for d in reading.detections if target_reached(d.range_m, reach)}
-        dec = self.runtime.decide(outputs, reached, self._cues(observation))
+        dec = self.runtime.decide(outputs, reached, self._cues(observation) if self._senses else _NO_CUES)
         for goal in dec.achieved_now:
             self.reached.append((goal, self.ticks))
         self.last, self.last_outputs = dec, outputs

@@ -165,6 +165,10 @@ class _Log:
         if topic == "/lfd/overlay":
             self.scenes.append(json.loads(data))
 
+    def write_tick(self, t: int, messages: list[tuple[str, bytes]]) -> None:
+        for topic, data in messages:
+            self.write_raw(topic, t, data)
+
     def write(self, topic: str, _t: int, scene: dict[str, Any]) -> None:
         if topic == "/lfd/overlay":
             self.scenes.append(scene)

@@ -6,10 +6,12 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from lfdfuse.control import safety
 from lfdfuse.control.safety import BLOCKED, SafetyParams, free_heading, free_heading_reference
+from lfdfuse.kernels.jit import Warmup
 
 ANGLES = np.radians(np.arange(-90.0, 90.5, 1.0))
 P = SafetyParams()
@@ -61,8 +63,14 @@ def _scan(rng: np.random.Generator, n: int) -> np.ndarray:
     return r
 
 
+@pytest.fixture
+def compiled_from_the_first_call(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(safety, "_WARMUP", Warmup(0))  # not the numpy answers of a short run
+
+
 @pytest.mark.skipif(not BLOCKED.ready(), reason="numba kernels unavailable here")
-@settings(max_examples=300, deadline=None)
+@pytest.mark.usefixtures("compiled_from_the_first_call")
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(
     st.integers(0, 2**32 - 1),
     st.floats(-math.pi, math.pi),
@@ -71,7 +79,8 @@ def _scan(rng: np.random.Generator, n: int) -> np.ndarray:
 def test_the_compiled_strip_test_gives_the_references_heading(
     seed: int, heading: float, angles: np.ndarray
 ) -> None:
-    """Free or turned away, bit for bit: the compiled first test and the numpy reference agree."""
+    """Free or turned away, bit for bit: the compiled first test (and the blocked heading's
+    candidates, a block at a time) and the numpy reference agree."""
     ranges = _scan(np.random.default_rng(seed), len(angles))
     got = free_heading(heading, ranges, angles, P)
     want = free_heading_reference(heading, ranges, angles, P)

@@ -383,16 +383,51 @@ def test_the_list_encoders_write_what_the_classes_write(
     row = lfd.BehaviorRow(t, names, vec, app, goal).encode()
     assert lfd.encode_behaviors(t, names, vec, app, goal) == row
     assert lfd_tick.encode_behavior_lists(t, names, vec.tolist(), app.tolist(), goal.tolist()) == row
+    assert lfd_tick.BehaviorsEncoder(names).encode(t, vec.tolist(), app.tolist(), goal.tolist()) == row
     bac = data.draw(st.integers(0, 2**62))
-    assert lfd.encode_bac(t, bac, list(names)) == lfd.Bac(t, bac, names).encode()
+    want = lfd.Bac(t, bac, names).encode()
+    assert lfd.encode_bac(t, bac, list(names)) == want
+    # spliced as the execute recorder writes them: the tick's timestamp, the rest made at another
+    t0 = data.draw(T_NS)
+    assert lfd_tick.stamp_head(t) + lfd_tick.tail_of(lfd_tick.bac_dict(t0, bac, names)) == want
     weights = dict(zip(names, data.draw(st.lists(REAL, min_size=k, max_size=k)), strict=True))
     x, y = data.draw(REAL), data.draw(REAL)
     assert lfd.encode_fused(t, x, y, weights) == lfd.FusedVector(t, x, y, weights).encode()
     step = data.draw(OPT_NAME)
+    want = lfd.NetworkStep(t, step, None, bac, True, names).encode()
     assert (
-        lfd.encode_step(t, step=step, goal=None, bac=bac, default_weights=True, achieved=list(names))
-        == lfd.NetworkStep(t, step, None, bac, True, names).encode()
+        lfd.encode_step(t, step=step, goal=None, bac=bac, default_weights=True, achieved=list(names)) == want
     )
+    assert (
+        lfd_tick.stamp_head(t) + lfd_tick.tail_of(lfd_tick.step_dict(t0, step, None, bac, True, names))
+        == want
+    )
+
+
+#: numbers at the edges of what orjson writes: zeros of both signs, the extremes, no number
+EDGE = st.sampled_from([0.0, -0.0, 1e16, -1e16, 1e-5, 1e300, 5e-324, -5e-324, math.inf, -math.inf, math.nan])
+ANY_REAL = st.floats(width=64) | EDGE
+
+
+@FAST
+@given(st.integers(0, 2**63 - 1), NAMES, st.data())
+def test_the_spliced_encoders_write_the_dict_encoders_bytes_for_any_number(
+    t: int, names: tuple[str, ...], data: st.DataObject
+) -> None:
+    """Whatever the numbers (NaN and ±inf, which a finite log never holds, as orjson writes
+    them: null), the spliced encoders write the bytes of the dicts they stand for."""
+    k = len(names)
+    xy = [list(p) for p in data.draw(st.lists(st.tuples(ANY_REAL, ANY_REAL), min_size=k, max_size=k))]
+    app = data.draw(st.lists(st.booleans(), min_size=k, max_size=k))
+    goal = data.draw(st.lists(st.booleans(), min_size=k, max_size=k))
+    want = orjson.dumps(lfd_tick.behaviors_dict(t, names, xy, app, goal))
+    assert lfd_tick.BehaviorsEncoder(names).encode(t, xy, app, goal) == want
+    nums = data.draw(st.lists(ANY_REAL, max_size=6))
+    assert lfd_tick.numbers(nums) == [orjson.dumps(v) for v in nums]
+    arrows = data.draw(st.lists(st.tuples(ANY_REAL, ANY_REAL, COLOR, st.floats(0.0, 3.0) | EDGE), max_size=6))
+    entity = data.draw(st.sampled_from(["fusion", "other"]))
+    want = orjson.dumps(msg.arrow_scene_of(t, entity, arrows))
+    assert msg.encode_arrow_scene(t, entity, arrows) == want
 
 
 @FAST

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import mcap.writer
@@ -98,25 +99,33 @@ def test_a_writer_interrupted_as_it_opens_leaves_no_temp_file(
 def _two_ways(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, messages: list[tuple[str, int, bytes]]
 ) -> None:
-    """The one-step message path writes the bytes mcap's public ``add_message`` writes."""
+    """The one-step message path (a message at a time, and the messages of one time together,
+    as a tick writes them) writes the bytes mcap's public ``add_message`` writes."""
     files = []
-    for fast in (True, False):
-        if not fast:
+    for way in ("one by one", "ticks", "mcap"):
+        if way == "mcap":
             monkeypatch.setattr(writer._Messages, "of", classmethod(lambda cls, w: None))
-        path = tmp_path / f"{fast}.mcap"
+        path = tmp_path / f"{len(files)}.mcap"
         with LogWriter(path, metadata={"seed": "1"}) as log:
-            assert (log._messages is not None) == fast
-            for topic, t, data in messages:
-                log.write_raw(topic, t, data)
+            assert (log._messages is not None) == (way != "mcap")
+            if way == "ticks":
+                for t, tick in itertools.groupby(messages, key=lambda m: m[1]):
+                    log.write_tick(t, [(topic, data) for topic, _, data in tick])
+            else:
+                for topic, t, data in messages:
+                    log.write_raw(topic, t, data)
         files.append(path.read_bytes())
-    assert files[0] == files[1]
+    assert files[0] == files[2]
+    assert files[1] == files[2]
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(
     st.lists(
         st.tuples(
-            st.sampled_from(["/cmd_vel", "/scan", "/pose"]), st.integers(0, 2**63 - 1), st.binary(max_size=60)
+            st.sampled_from(["/cmd_vel", "/scan", "/pose"]),
+            st.one_of(st.integers(0, 3), st.integers(0, 2**63 - 1)),  # often a time again, as in a tick
+            st.binary(max_size=60),
         ),
         max_size=40,
     )
@@ -135,5 +144,22 @@ def test_messages_across_chunks_are_written_as_mcap_writes_them(
     blob = bytes(range(256)) * 40
     messages = [
         ("/scan" if k % 3 else "/pose", (k * 7919) % 5000, blob[: (k * 3) % 10_000]) for k in range(2500)
+    ]
+    _two_ways(tmp_path, monkeypatch, messages)
+
+
+def test_ticks_of_messages_at_one_time_across_chunks_are_written_as_mcap_writes_them(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # several messages a tick at one time, as a run writes them, over more than one chunk; a
+    # tick now and then earlier than the last (a copy of a file out of order)
+    blob = bytes(range(256)) * 40
+    messages = [
+        (
+            ("/scan", "/pose", "/cmd_vel")[k % 3],
+            10_000 + (k // 3) * 1000 - (5000 if k % 97 == 0 else 0),
+            blob[: (k * 7) % 9000],
+        )
+        for k in range(3000)
     ]
     _two_ways(tmp_path, monkeypatch, messages)

@@ -101,3 +101,53 @@ def test_turns_on_the_spot_keep_to_the_side_they_began_on(monkeypatch: pytest.Mo
     commands, _ = _drive(7, 0.0)
     assert (commands[:, 0] < 0.05).all()  # on the spot, or nearly
     assert (commands[:, 1] > 0).all(), commands[:, 1]
+
+
+def _decisions(table: dict[str, Any], *, senses: bool, seconds: float = 20.0) -> list[tuple[Any, ...]]:
+    world, sensors = load_world("building"), SensorParams()
+    rng = np.random.default_rng(3)
+    driver = NetworkStepper(table=parse_table(table), world=world, sensors=sensors, rng=rng)
+    driver._senses = driver.runtime.senses = senses  # what they decide themselves: only for landmarks
+    seen: list[tuple[Any, ...]] = []
+
+    class _Tap:
+        def record(self, obs: Any, command: tuple[float, float]) -> None:
+            d = driver.last
+            assert d is not None
+            seen.append((command, d.path, d.bac, d.fused.tobytes(), d.weights, d.achieved_now))
+
+    run(Simulator(world, rng, sensors=sensors), driver, start=None, duration_s=seconds, sinks=[_Tap()])
+    return seen
+
+
+def test_a_table_without_landmarks_decides_the_same_without_sensing_cues() -> None:
+    """Only a landmark reads the opening cues: a table without one senses none, and every
+    command and decision is the one it makes sensing them."""
+    assert not NetworkStepper(
+        table=parse_table(TABLE),
+        world=load_world("building"),
+        sensors=SensorParams(),
+        rng=np.random.default_rng(0),
+    )._senses
+    assert _decisions(TABLE, senses=False) == _decisions(TABLE, senses=True)
+
+
+def test_a_table_with_a_landmark_senses_cues() -> None:
+    table = copy.deepcopy(TABLE)
+    inner = {"name": "to", "goal": None, "landmark": {"opening": "left", "nth": 1}, "fusion": []}
+    red = table["network"]["steps"][0]
+    table["network"]["steps"][0] = {
+        "name": "reach-red",
+        "goal": {"target": "red"},
+        "network": {
+            "name": "reach-red",
+            "steps": [inner, {k: v for k, v in red.items() if k != "goal"} | {"goal": {"target": "red"}}],
+        },
+    }
+    driver = NetworkStepper(
+        table=parse_table(table),
+        world=load_world("building"),
+        sensors=SensorParams(),
+        rng=np.random.default_rng(0),
+    )
+    assert driver._senses
