@@ -112,7 +112,7 @@ def intersect(ox: np.ndarray, oy: np.ndarray, dx: np.ndarray, dy: np.ndarray, se
     dxc, dyc = dx[:, None], dy[:, None]
     denom = dxc * ey - dyc * ex
     wx, wy = ax - ox[:, None], ay - oy[:, None]
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # 1/subnormal: inf
         inv = 1.0 / denom
         t = (wx * ey - wy * ex) * inv
         u = (wx * dyc - wy * dxc) * inv
