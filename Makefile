@@ -29,9 +29,11 @@ demo: install
 	@echo "Open $(DEMO)/*-run.mcap in Foxglove or Lichtblick: map, robot, laser and the fusion arrows (/lfd/overlay)."
 	$(PY) -m tests.support.demo_check $(DEMO)
 
-# on every core (pytest-xdist; work stealing, so one long closed loop does not hold the rest back)
+# one worker more than the cores (pytest-xdist; work stealing, so one long closed loop does not
+# hold the rest back): a fifth of the suite is live tests waiting on the clock (DDS participants,
+# Foxglove servers, terminals at 10-30 Hz), and the extra worker computes meanwhile
 test: warm
-	$(PY) -m pytest -n auto --dist worksteal
+	$(PY) -m pytest -n $$(( $$(nproc) + 1 )) --dist worksteal
 
 # before the tests: byte-compiled (every command a test starts imports lfdfuse again, and where the
 # environment says PYTHONDONTWRITEBYTECODE each would compile its sources, ~0.2 s of CPU a process),
