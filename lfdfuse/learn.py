@@ -20,6 +20,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+import numpy as np
+
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.demo_alignment import same_behaviors
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run, estimate_runs
@@ -27,6 +29,7 @@ from lfdfuse.estimate.pooled_subgoals import Verdict, pool_subgoals
 from lfdfuse.estimate.sub_step_corrections import FurtherDemo
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.check import CHECK_STARTS, DemoWorld, demo_world
+from lfdfuse.execute.lesson_check import CheckedLesson, checked_lesson
 from lfdfuse.execute.repair import Amends, Repair, repair
 from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.log.reader import Run
@@ -71,6 +74,9 @@ class LearnResult:
     repair: Repair | None = None  # subgoals checked in the demo's world: what the check did
     #: subgoals over several demos: what became of each decision (kept, merged, dropped, added)
     verdicts: tuple[Verdict, ...] = ()
+    #: a correction pooled with sub-goals: the lesson checked in the demo's world
+    #: (:mod:`lfdfuse.execute.lesson_check`)
+    lesson: CheckedLesson | None = None
 
 
 def learn_run(
@@ -221,7 +227,8 @@ def _learn_subgoals_pooled(
     first = part(progress, start=0.0, size=0.4, total=1.0)
     paper, groups, skipped = estimate_run(run, opts=options.estimate, name=names[0], progress=first)
     then = part(progress, start=0.4, size=0.4, total=1.0)
-    table, decisions, fixed = _with_subgoals(paper, run, track, home_of(raw, run), options, then)
+    home = home_of(raw, run)
+    table, decisions, fixed = _with_subgoals(paper, run, track, home, options, then)
     others = [
         FurtherDemo(
             name,
@@ -242,8 +249,37 @@ def _learn_subgoals_pooled(
         opts=options.estimate,
         params=options.decisions,
     )
+    built, checked = res.table, None
+    if home is not None and options.check_starts is not None and any(o.correction for o in others):
+        checked = checked_lesson(
+            table,
+            res.table,
+            taken_over=taken_over(others),
+            home=home,
+            starts=home.starts(options.check_starts, options.estimate.seed),
+            corrections=[
+                Pose(*(float(v) for v in w.pose[0]))
+                for o, (_, w) in zip(others, read[1:], strict=True)
+                if o.correction and w.pose is not None and len(w.pose) and w.world_yaml == raw.world_yaml
+            ],
+        )
+        built = checked.table
     tell(progress, 1.0, 1.0)
-    return LearnResult(res.table, groups, skipped, res.decisions, tuple(names), fixed, res.verdicts)
+    return LearnResult(built, groups, skipped, res.decisions, tuple(names), fixed, res.verdicts, checked)
+
+
+def taken_over(others: Sequence[FurtherDemo]) -> set[str]:
+    """The goal steps (top-level names) the corrections' persons took over in: the network's step
+    at each one's first informative tick."""
+    out: set[str] = set()
+    for o in others:
+        if not o.correction or o.steps is None:
+            continue
+        ticks = np.nonzero(o.run.informative)[0]
+        at = o.steps[int(ticks[0])] if len(ticks) else None
+        if at is not None:
+            out.add(at.split("/", 1)[0])
+    return out
 
 
 @dataclass(frozen=True)
@@ -254,6 +290,7 @@ class Lesson:
     changes: tuple[str, ...]  # one line per goal step added, re-structured or re-weighted
     verdicts: tuple[Verdict, ...]  # with sub-goals: what became of each decision
     segmented: Path  # the correction, segmented with the table's behaviours
+    checked: CheckedLesson | None = None  # with sub-goals: the lesson checked in the demo's world
 
 
 def correction_lesson(
@@ -272,7 +309,7 @@ def correction_lesson(
     segment_file(correction, out=seg, behaviors=",".join(table.behaviors))
     subgoals = any(s.landmark is not None for s in leaf_steps(table))
     res = learn([*demos, seg], options=replace(options, subgoals=subgoals), progress=progress)
-    return Lesson(res.table, tuple(step_changes(table, res.table)), res.verdicts, seg)
+    return Lesson(res.table, tuple(step_changes(table, res.table)), res.verdicts, seg, res.lesson)
 
 
 # ------------------------------------------------------------------------------ demonstrate

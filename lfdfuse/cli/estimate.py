@@ -110,3 +110,5 @@ def estimate_cmd(
         console.print(f"decisions over {len(res.sources)} demos:")
         for v in res.verdicts:
             console.print(f"  {v.describe()}", markup=False, soft_wrap=True)
+    if res.lesson is not None:
+        console.print(res.lesson.describe(), markup=False, soft_wrap=True)

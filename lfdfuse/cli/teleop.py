@@ -288,6 +288,8 @@ def _lesson(table: FusionTable, demos: list[Path], out: Path, estimate_to: Path 
         console.print(f"  {line}", markup=False, soft_wrap=True)
     for v in lesson.verdicts:
         console.print(f"  {v.describe()}", markup=False, soft_wrap=True)
+    if lesson.checked is not None:
+        console.print(f"  {lesson.checked.describe()}", markup=False, soft_wrap=True)
     if estimate_to is not None:
         write_table(lesson.table, estimate_to)
 

@@ -79,7 +79,8 @@ def decisions_of(
     segments: tuple[GoalSegment, ...] | None = None,
 ) -> list[DecisionPoint]:
     """Decision points of a further demo, the first demo's paper table replayed on its steps
-    (``segments``: of these spans of its goal segments instead)."""
+    (``segments``: of these spans of its goal segments instead), each opening counted at its
+    first onset (:attr:`DecisionParams.first_onset`)."""
     run = demo.run
     mapped = replace(run, segment_of=np.asarray(step_of, dtype=np.int64)[run.segment_of])
     fused = fused_vectors(paper, mapped, np.arange(len(run.t_ns)))
@@ -89,7 +90,7 @@ def decisions_of(
         informative=run.informative,
         fused=fused,
         track=demo.track,
-        params=params,
+        params=replace(params, first_onset=True),
     )
 
 

@@ -133,6 +133,11 @@ class DecisionParams:
     #: sensor, its sectors held this far back (None: not looked for); the landmarks of a
     #: decision found there name that lag, and the runtime senses them with it
     short_lag_m: float | None = 1.5
+    #: an opening's order is counted at its first onset where the onset the decision is found
+    #: at flickers at its edge (:func:`~lfdfuse.segment.track.opening_order`): on for a further
+    #: demo or a correction (``estimate --subgoals`` with several demos); off for the first demo,
+    #: whose tables stay what they were
+    first_onset: bool = False
 
 
 @dataclass(frozen=True)
@@ -303,7 +308,7 @@ def _decision(
         and is_corner(tr, s, d, since, shape_steps=p.shape_steps, other_steps=p.corner_other_steps)
     ):
         return None  # a corner: the teacher turned where there was no other way
-    nth = opening_order(tr, s, since, d, q.landmark, q.passing)
+    nth = opening_order(tr, s, since, d, q.landmark, q.passing, first_onset=q.first_onset)
     within = (
         distance_tolerance(tr, s, since, d, odo, share=q.within_share, min_m=q.within_min_m)
         if q.landmark == OpeningCue.DISTANCE

@@ -171,9 +171,22 @@ def is_corner(
 
 
 def opening_order(
-    track: LandmarkTrack, side: int, since: int, d: int, cue: OpeningCue, passing: PassParams
+    track: LandmarkTrack,
+    side: int,
+    since: int,
+    d: int,
+    cue: OpeningCue,
+    passing: PassParams,
+    *,
+    first_onset: bool = False,
 ) -> int:
-    """The order on its side since ``since`` of the opening met at ``d``, as ``cue`` counts it."""
+    """The order on its side since ``since`` of the opening met at ``d``, as ``cue`` counts it.
+
+    ``first_onset``: an onset at ``d`` flickering at the edge of an opening met just before
+    (within :attr:`PassParams.merge_m`) has that opening's order, counted at its first onset,
+    whether it was passed by or is the one turned into (the runtime meets the opening at its
+    first onset). Without it such an onset counts the openings passed before ``d``, one short
+    where the opening met just before is the one the turn goes into."""
     if cue == OpeningCue.PASSED:
         lo = since + 1  # the runtime starts a step's count at the tick after the last was met
         if d < lo:
@@ -182,6 +195,10 @@ def opening_order(
         before, new = passed_before(
             track.onsets[cut], track.step_m[cut], track.turn_rad[cut], track.held_rad[cut], passing
         )
+        if first_onset and not new[-1, side]:
+            first = np.nonzero(new[:-1, side])[0]
+            if len(first) and float(track.step_m[lo + int(first[-1]) + 1 : d + 1].sum()) <= passing.merge_m:
+                return int(before[first[-1], side]) + 1
         # an onset flickering at the edge of an opening met just before is that opening; and
         # at least the first (where the opening met just before was turned into, not passed,
         # it counts nothing, and ``nth`` 0 is no landmark a table can hold)

@@ -210,7 +210,7 @@ def teach_again_screened(
         failing,
         True,
         after,
-        tuple(v.describe() for v in res.verdicts),
+        tuple(v.describe() for v in res.verdicts) + (() if res.lesson is None else (res.lesson.describe(),)),
         table,
         res.table,
         {**s.times, **clock.times},

@@ -1,0 +1,140 @@
+"""A correction's lesson checked in the demo's world: what the table could do before, it still does.
+
+A correction re-weights the rows of the sub-steps its person drove in, and a row drives the robot
+wherever its (step, BAC) comes up, from every start: a few person ticks at the mouth of a dead
+end re-weight the drive-on step's rows inside it too, where a robot that strayed in found its way
+back out with the demo's rows; the person driving on past a goal re-weights the next goal step's
+first sub-step, which the network never failed in. So a start that completed before can fail
+after.
+
+:func:`checked_lesson` drives the tables of three lessons, largest first, from the demo's check
+starts (:meth:`~lfdfuse.execute.check.DemoWorld.starts`) and from each correction's own start
+(in the demo's world):
+
+``whole``
+    every row and step the correction changed;
+``where taken over``
+    rows re-weighted only in the goal steps the person took over in (the network's step at the
+    person's first tick); every other row as before, bit for bit;
+``steps only``
+    the decisions the correction added or re-structured, with their rows; every row of a step
+    the table had before as it was.
+
+It takes the first lesson that completes every check start the table before completed and the
+corrections' starts; else the first that keeps the check starts; else none (the table before).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Collection, Sequence
+from dataclasses import dataclass, replace
+
+from lfdfuse.execute.check import DemoWorld, rollout
+from lfdfuse.network.table import FusionTable, Network, Step
+from lfdfuse.robot.pose import Pose
+
+#: the lessons tried, largest first (see the module docstring)
+LESSONS = ("whole", "where taken over", "steps only")
+
+
+@dataclass(frozen=True)
+class CheckedLesson:
+    """The table taken, which lesson it is (None: none, the table before) and why."""
+
+    table: FusionTable
+    lesson: str | None
+    why: str
+
+    def describe(self) -> str:
+        took = "the table before (the correction not taken)" if self.lesson is None else self.lesson
+        return f"lesson checked in the demo's world: {took}: {self.why}"
+
+
+def _leaves(net: Network, prefix: str = "") -> dict[str, Step]:
+    out: dict[str, Step] = {}
+    for st in net.steps:
+        name = f"{prefix}{st.name}"
+        if st.network is not None:
+            out.update(_leaves(st.network, name + "/"))
+        else:
+            out[name] = st
+    return out
+
+
+def _rows_back(table: FusionTable, before: FusionTable, keep: Callable[[str], bool]) -> FusionTable:
+    """``table`` with every leaf ``before`` also has (by its nested name) back to ``before``'s rows,
+    but those ``keep`` names."""
+    old = _leaves(before.network)
+
+    def walk(net: Network, prefix: str) -> Network:
+        steps = []
+        for st in net.steps:
+            name = f"{prefix}{st.name}"
+            if st.network is not None:
+                steps.append(replace(st, network=walk(st.network, name + "/")))
+                continue
+            o = old.get(name)
+            if o is not None and not keep(name) and o.fusion != st.fusion:
+                st = replace(st, fusion=o.fusion)
+            steps.append(st)
+        return replace(net, steps=tuple(steps))
+
+    return replace(table, network=walk(table.network, ""))
+
+
+def lessons(
+    before: FusionTable, whole: FusionTable, taken_over: Collection[str]
+) -> list[tuple[str, FusionTable]]:
+    """The tables of :data:`LESSONS`, each that changes a row or step of ``before`` and differs
+    from those before it: ``taken_over`` the goal steps (top-level names) the person took over in."""
+    made = [
+        ("whole", whole),
+        ("where taken over", _rows_back(whole, before, lambda n: n.split("/", 1)[0] in taken_over)),
+        ("steps only", _rows_back(whole, before, lambda n: False)),
+    ]
+    out: list[tuple[str, FusionTable]] = []
+    for name, table in made:
+        if table.network != before.network and all(table.network != t.network for _, t in out):
+            out.append((name, table))
+    return out
+
+
+def checked_lesson(
+    before: FusionTable,
+    whole: FusionTable,
+    *,
+    taken_over: Collection[str],
+    home: DemoWorld,
+    starts: Sequence[Pose],
+    corrections: Sequence[Pose],
+) -> CheckedLesson:
+    """The largest lesson that keeps what ``before`` completed from ``starts`` in ``home`` and
+    completes from the ``corrections``' starts (see the module docstring)."""
+    tried = lessons(before, whole, taken_over)
+    if not tried:
+        return CheckedLesson(whole, "whole", "no row or step changed")
+    everywhere = [*starts, *corrections]
+
+    def completes(table: FusionTable, at: Sequence[Pose]) -> list[bool]:
+        return [rollout(table, home.world, s, home.max_time_s)[0] >= home.goals for s in at]
+
+    base = completes(before, starts)
+    kept: tuple[str, FusionTable] | None = None
+    for name, table in tried:
+        done = completes(table, everywhere)
+        if not all(d for d, b in zip(done, base, strict=False) if b):
+            continue
+        if all(done[len(starts) :]):
+            return CheckedLesson(
+                table, name, f"{_count(done[: len(starts)], base)}; the correction's start completes"
+            )
+        kept = kept or (name, table)
+    if kept is not None:
+        return CheckedLesson(
+            kept[1], kept[0], "keeps every check start; no lesson completes the correction's start"
+        )
+    return CheckedLesson(before, None, "every lesson fails a check start the table before completed")
+
+
+def _count(done: Sequence[bool], base: Sequence[bool]) -> str:
+    return f"{sum(done)} of {len(done)} check starts complete ({sum(base)} before)"

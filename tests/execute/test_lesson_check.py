@@ -1,0 +1,169 @@
+"""A correction's lesson checked in the demo's world (:mod:`lfdfuse.execute.lesson_check`).
+
+The lessons are laws over which rows a correction re-weighted; which one is taken is checked
+with the rollout replaced by a stand-in that says which start each table completes (the closed
+loop itself: the ``corrections`` bench, seeds 1771, 1807 and 1935 in the README's measurement).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lfdfuse.execute import lesson_check
+from lfdfuse.execute.check import DemoWorld
+from lfdfuse.execute.lesson_check import checked_lesson, lessons
+from lfdfuse.network.landmark_goals import Landmark
+from lfdfuse.network.table import FusionRow, FusionTable, Network, Step, named_leaf_steps
+from lfdfuse.robot.pose import Pose
+from lfdfuse.world.parse import World
+
+
+def _row(bac: int, w: float) -> FusionRow:
+    return FusionRow(
+        bac=bac, weights={"a": w, "b": 1.0 - w}, std={"a": 0.1, "b": 0.1}, samples=40, fit_error_deg=5.0
+    )
+
+
+def _table(*steps: Step) -> FusionTable:
+    return FusionTable(("a", "b"), {"a": 0.5, "b": 0.5}, Network("t", steps))
+
+
+def _before() -> FusionTable:
+    inner = (
+        Step(
+            "to-left-opening-1",
+            None,
+            (_row(1, 0.3), _row(3, 0.4)),
+            landmark=Landmark("opening", "left", 1, 9.0),
+        ),
+        Step("turn-left", None, (_row(3, 0.2),), landmark=Landmark("turned", "left", angle_rad=1.4)),
+        Step("reach-green", None, (_row(3, 0.5),)),
+    )
+    return _table(
+        Step("reach-red", "red", (_row(3, 0.4), _row(5, 0.6))),
+        Step("reach-green", "green", (), Network("reach-green", inner)),
+        Step("reach-blue", "blue", (_row(3, 0.7),)),
+    )
+
+
+def _reweighted(table: FusionTable, names: set[str], w: float) -> FusionTable:
+    """``table`` with every row of the leaves ``names`` re-weighted to ``w`` (and one row added)."""
+
+    def walk(net: Network, prefix: str) -> Network:
+        steps = []
+        for s in net.steps:
+            name = prefix + s.name
+            if s.network is not None:
+                s = replace(s, network=walk(s.network, name + "/"))
+            elif name in names:
+                s = replace(s, fusion=(*(_row(r.bac, w) for r in s.fusion), _row(7, w)))
+            steps.append(s)
+        return replace(net, steps=tuple(steps))
+
+    return replace(table, network=walk(table.network, ""))
+
+
+def _with_added_step(table: FusionTable) -> FusionTable:
+    """``table`` with a new decision in reach-red: its leaves are new."""
+    red = table.network.steps[0]
+    inner = (
+        Step("to-right-opening-2", None, (_row(3, 0.9),), landmark=Landmark("opening", "right", 2, 20.0)),
+        Step("turn-right", None, (_row(3, 0.8),), landmark=Landmark("turned", "right", angle_rad=1.3)),
+        replace(red, goal=None),
+    )
+    nested = Step("reach-red", "red", (), Network("reach-red", inner))
+    return replace(table, network=replace(table.network, steps=(nested, *table.network.steps[1:])))
+
+
+LEAVES = [
+    "reach-red",
+    "reach-green/to-left-opening-1",
+    "reach-green/turn-left",
+    "reach-green/reach-green",
+    "reach-blue",
+]
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.sets(st.sampled_from(LEAVES), min_size=1),
+    st.sets(st.sampled_from(["reach-red", "reach-green", "reach-blue"])),
+    st.booleans(),
+)
+def test_a_smaller_lesson_keeps_every_row_outside_it_bit_for_bit(
+    changed: set[str], taken_over: set[str], added: bool
+) -> None:
+    before = _before()
+    whole = _reweighted(before, changed, 0.95)
+    if added:
+        whole = _with_added_step(whole)
+    made = dict(lessons(before, whole, taken_over))
+    assert next(iter(made)) == "whole" and made["whole"] is whole
+    old = dict(named_leaf_steps(before))
+    for name, table in made.items():
+        assert table != before
+        for leaf, step in named_leaf_steps(table):
+            new = dict(named_leaf_steps(whole))[leaf]
+            if leaf not in old:  # a step the correction added: its rows, in every lesson
+                assert step.fusion == new.fusion
+            elif name == "steps only" or (
+                name == "where taken over" and leaf.split("/")[0] not in taken_over
+            ):
+                assert step.fusion == old[leaf].fusion
+            else:
+                assert step.fusion == new.fusion
+            assert step.landmark == new.landmark
+    tables = list(made.values())
+    assert all(a != b for i, a in enumerate(tables) for b in tables[:i])
+
+
+Rollout = Callable[[FusionTable, World, Pose, float], tuple[int, np.ndarray]]
+
+
+def _fake_rollout(completes: dict[tuple[tuple[int, int], float], bool]) -> Rollout:
+    """A rollout that reaches every goal where ``completes[(table's weights, start x)]`` (the
+    weights: of reach-blue's and of the turn's first row, in hundredths)."""
+
+    def rollout(table: FusionTable, world: World, start: Pose, max_time_s: float) -> tuple[int, np.ndarray]:
+        steps = dict(named_leaf_steps(table))
+        key = tuple(
+            round(steps[n].fusion[0].weights["a"] * 100) for n in ("reach-blue", "reach-green/turn-left")
+        )
+        return (3 if completes[((key[0], key[1]), start.x)] else 1), np.zeros((1, 3))
+
+    return rollout
+
+
+def _checked(monkeypatch: pytest.MonkeyPatch, outcome: dict[str, str]) -> lesson_check.CheckedLesson:
+    """``outcome`` per table (``before``, ``whole``, ``where taken over``): ✓/✗ per start, the
+    check's three starts, then the correction's."""
+    before = _before()
+    whole = _reweighted(before, {"reach-blue", "reach-green/turn-left"}, 0.95)
+    w = {"before": (70, 20), "whole": (95, 95), "where taken over": (70, 95)}
+    completes = {(w[k], float(x)): c == "✓" for k, marks in outcome.items() for x, c in enumerate(marks)}
+    monkeypatch.setattr(lesson_check, "rollout", _fake_rollout(completes))
+    home = DemoWorld(None, Pose(0, 0, 0), np.zeros((2, 2)), 10.0, 3)  # type: ignore[arg-type]  # unused by the stand-in
+    starts = [Pose(float(x), 0.0, 0.0) for x in range(3)]
+    return checked_lesson(
+        before, whole, taken_over={"reach-green"}, home=home, starts=starts, corrections=[Pose(3.0, 0, 0)]
+    )
+
+
+def test_the_whole_lesson_is_taken_where_it_keeps_every_start(monkeypatch: pytest.MonkeyPatch) -> None:
+    got = _checked(monkeypatch, {"before": "✓✗✓✗", "whole": "✓✓✓✓", "where taken over": "✓✓✓✓"})
+    assert got.lesson == "whole"
+
+
+def test_a_lesson_that_breaks_a_start_the_table_completed_is_not_taken(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    got = _checked(monkeypatch, {"before": "✓✗✓✗", "whole": "✗✓✓✓", "where taken over": "✓✗✓✓"})
+    assert got.lesson == "where taken over" and "completes" in got.why
+    got = _checked(monkeypatch, {"before": "✓✗✓✗", "whole": "✗✓✓✓", "where taken over": "✓✗✗✓"})
+    assert got.lesson is None and got.table == _before()
