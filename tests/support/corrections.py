@@ -5,10 +5,11 @@ where the robot left the path: the last point of the teacher's path it met in or
 :func:`lfdfuse.execute.check.follow` counts them) before it strayed :data:`LEAVE_M` from the
 stretch of the path since (into a dead end the teacher passed by, round the wrong way) or took
 :data:`STALL_S` to meet the next (dithering): a point it meets only after coming back is not
-followed. Where the teacher reached a goal the robot reached too, the points within :data:`GOAL_M`
-of it need not be met (the robot reaches a goal from where its camera sees it). :func:`record_correction` then runs
-``teleop --table`` from the same start and seed — tick for tick the failed run until the person takes over — and a
-:class:`PathPerson` takes over a little before that point, drives the teacher's path (pure
+followed. Where the teacher reached a goal the robot reached too, the points within
+:data:`GOAL_M` of it need not be met (the robot reaches a goal from where its camera sees it);
+a robot that met the path past a goal before it reached it (only coming round again) missed it
+there. :func:`record_correction` then runs ``teleop --table`` from the same start and seed —
+tick for tick the failed run until the person takes over — and a :class:`PathPerson` takes over a little before that point, drives the teacher's path (pure
 pursuit, as a Twist client would) through the place the robot missed and some metres past it,
 and hands back; the network drives on. The log is segmented with the table's behaviours.
 """
@@ -100,21 +101,31 @@ def correction_plan(
     k = 0
     while k < len(pts):
         i = pts[k]
-        late = next(
-            (n for n, g in enumerate(goals_at) if n >= len(reached) and arc[i] > arc[g] + LATE_M),
-            None,
-        )
-        if reached_at is not None and late is not None:
-            # on past a goal it never reached: missed there, taken over before it
-            missed = goals_at[late]
-            last_i, last_t = max(((a, b) for a, b in met if a <= missed), default=(pts[0], 0))
-            break
         stretch = teacher_xy[last_i : i + 1]
         away = np.min(np.hypot(*(robot_xy[t:, None, :] - stretch[None, :, :]).transpose(2, 0, 1)), axis=1)
         left = np.nonzero(away > LEAVE_M)[0]
         out = int(left[0]) if len(left) else len(away)
         d = np.hypot(*(robot_xy[t : t + min(out, stall)] - teacher_xy[i]).T)
         hit = np.nonzero(d < RADIUS_M)[0]
+        # past a goal it never reached, or meeting the path past a goal it reached only later
+        # (coming round again; where the path on runs apart from the way to the goal, not out
+        # of a spur beside the way in): missed there, taken over before it
+        when = t + int(hit[0]) if len(hit) else None
+        late = next(
+            (
+                n
+                for n, g in enumerate(goals_at)
+                if arc[i] > arc[g] + LATE_M
+                and (
+                    n >= len(reached) or (when is not None and reached[n] > when and _apart(teacher_xy, i, g))
+                )
+            ),
+            None,
+        )
+        if reached_at is not None and late is not None:
+            missed = goals_at[late]
+            last_i, last_t = max(((a, b) for a, b in met if a <= missed), default=(pts[0], 0))
+            break
         if len(hit):
             t += int(hit[0])
             last_i, last_t = i, t
@@ -142,6 +153,11 @@ def correction_plan(
     return _driving_into_goals(
         teacher_xy, take * dt_s, start, end, [g for g in goals_at if start <= g <= end]
     )
+
+
+def _apart(teacher_xy: np.ndarray, i: int, g: int) -> bool:
+    """The teacher's path at ``i`` is :data:`LEAVE_M` from all of its way to ``g`` (before ``i``)."""
+    return bool(np.min(np.hypot(*(teacher_xy[: g + 1] - teacher_xy[i]).T)) > LEAVE_M)
 
 
 def _driving_into_goals(

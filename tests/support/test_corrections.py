@@ -144,3 +144,36 @@ def test_the_person_starts_on_the_way_into_a_spur_not_on_the_way_out() -> None:
     assert plan is not None
     assert plan.path_xy[0, 0] == 8.0  # on the teacher's way up
     assert len(plan.stops) == 1 and _drives_into(plan, teacher[goal_at])
+
+
+def test_a_robot_that_drove_past_a_goal_and_reached_it_only_coming_round_again_is_brought_to_it() -> None:
+    # the robot drives past the goal (its camera never saw it), round a loop and back along the
+    # path, where it reaches the goal the second time: the person takes over on the first pass,
+    # before the goal, and drives to where the teacher reached it
+    goal_at = len(_line((0.0, 0.0), (10.0, 0.0)))
+    first = _line((0.0, 0.0), (20.0, 0.0))
+    loop = [
+        _line((20.0, 0.0), (20.0, 10.0)),
+        _line((20.0, 10.0), (0.0, 10.0)),
+        _line((0.0, 10.0), (0.0, 0.0)),
+    ]
+    robot = np.concatenate([first, *loop, TEACHER])
+    again = len(robot) - len(TEACHER) + goal_at
+    assert correction_plan(TEACHER, robot, DT_S, goals_at=[goal_at], reached_at=[len(first) // 3]) is None
+    plan = correction_plan(TEACHER, robot, DT_S, goals_at=[goal_at], reached_at=[again])
+    assert plan is not None and len(plan.stops) == 1
+    assert plan.take_s < goal_at * DT_S
+    assert _drives_into(plan, TEACHER[goal_at])
+
+
+def test_a_robot_that_meets_the_way_out_of_a_spur_on_its_way_in_is_not_corrected() -> None:
+    # the teacher drove up a spur to a goal and back down beside its way up; the robot drives up
+    # where the teacher came down (meeting the way out before it reaches the goal), reaches the
+    # goal at the spur's end and drives on as the teacher did
+    up = [_line((0.0, 0.0), (8.0, 0.0)), _line((8.0, 0.0), (8.0, 4.0))]
+    down = [_line((8.4, 4.0), (8.4, 0.0)), _line((8.4, 0.0), (20.0, 0.0)), [[20.0, 0.0]]]
+    teacher = np.concatenate([*up, *down])
+    goal_at = sum(len(a) for a in up)
+    robot = np.concatenate([_line((0.0, 0.0), (8.4, 0.0)), _line((8.4, 0.0), (8.4, 4.0)), *down])
+    reached = len(robot) - sum(len(a) for a in down)
+    assert correction_plan(teacher, robot, DT_S, goals_at=[goal_at], reached_at=[reached]) is None
