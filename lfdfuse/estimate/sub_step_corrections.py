@@ -22,7 +22,7 @@ from lfdfuse.network.table import FusionTable, Step
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, find_decisions
 from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.segment.read import SegmentedRun
-from lfdfuse.segment.track import LandmarkTrack, teacher_turns
+from lfdfuse.segment.track import LandmarkTrack
 
 
 @dataclass(frozen=True)
@@ -91,32 +91,7 @@ def decisions_of(
         fused=fused,
         track=demo.track,
         params=replace(params, first_onset=True),
-        forced=taken_over_turns(demo, params) if demo.correction else (),
     )
-
-
-#: a correction's person turning this soon (ticks) after taking over turned where the network
-#: would not
-TAKEN_TURN_TICKS = 100
-
-
-def taken_over_turns(demo: FurtherDemo, params: DecisionParams) -> list[int]:
-    """The first tick of the person's first turn (of at least ``params.min_turn_rad``) begun after and
-    within :data:`TAKEN_TURN_TICKS` of each takeover of correction ``demo``: the turn the person
-    took over for, a decision whatever the opening's shape seemed from the sectors held
-    before it (a branch just past a corner reads as the corner's wall)."""
-    person = np.asarray(demo.run.informative, dtype=bool)
-    starts = np.nonzero(person & ~np.concatenate([[False], person[:-1]]))[0]
-    out: list[int] = []
-    for s in starts.tolist():
-        stop = s + int(np.argmin(person[s:])) if not person[s:].all() else len(person)
-        turns = teacher_turns(
-            demo.track, s, stop, began_rad=params.began_rad, min_turn_rad=params.min_turn_rad
-        )
-        first = min((a for a, _, _ in turns if s < a < s + TAKEN_TURN_TICKS), default=None)
-        if first is not None:
-            out.append(first)
-    return out
 
 
 def _leaf_at(demo: FurtherDemo, step: str, i: int) -> str | None:

@@ -187,8 +187,7 @@ def find_decisions(
     ``demo (N, 2)`` demonstrated vectors, ``fused (N, 2)`` the segment's learned fusion
     replayed on the same steps. ``forced``: steps within teacher's turns that are decisions
     whatever the fusion did and whatever the opening's shape (a rollout of the learned table
-    left the teacher's path there: :mod:`lfdfuse.execute.repair`; a correction's person turned
-    there after taking over), unless one overlaps them.
+    left the teacher's path there: :mod:`lfdfuse.execute.repair`), unless one overlaps them.
     ``cues``: the landmark cue of the decision at that onset step, instead of ``params``'.
     ``whole``: onset steps of decisions whose turn landmark is the teacher's whole turn (no
     share, no margin short of it; the turn ended short left the robot facing the way back).

@@ -7,20 +7,15 @@ import math
 from dataclasses import replace
 
 import numpy as np
-from hypothesis import given, settings
-from hypothesis import strategies as st
 
-from lfdfuse.behaviors.openings import OpeningParams
 from lfdfuse.estimate.pooled_subgoals import Verdict, same_place
-from lfdfuse.estimate.sub_step_corrections import TAKEN_TURN_TICKS, FurtherDemo, goals_once, taken_over_turns
+from lfdfuse.estimate.sub_step_corrections import goals_once
 from lfdfuse.network.changes import step_changes
 from lfdfuse.network.landmark_goals import Landmark
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step
-from lfdfuse.robot.readings import ScanGeometry
-from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
+from lfdfuse.segment.decisions import DecisionPoint
 from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.segment.read import SegmentedRun
-from lfdfuse.segment.track import LandmarkTrack
 
 SPUR = DecisionPoint(
     segment=1,
@@ -128,44 +123,3 @@ def test_a_goal_met_again_while_lingering_starts_no_goal_segment_of_a_correction
     ]
     plain = _run((10, red), (30, green), (20, None))
     assert goals_once(plain) is plain
-
-
-def _correction(person: tuple[int, int], turns: list[tuple[int, int, float]], n: int = 600) -> FurtherDemo:
-    """A correction whose person drove ticks ``[a, b)`` and whose heading was turned from the held one
-    by 90° (toward each turn's sign) over each turn's ``[a, b)``."""
-    run = _run((n, "attract_red"))
-    informative = np.zeros(n, bool)
-    informative[person[0] : person[1]] = True
-    held = np.zeros(n)
-    for a, b, sgn in turns:
-        held[a:b] = sgn * math.radians(90.0)
-    geom = ScanGeometry(-math.pi / 2, math.pi / 2, 3, 8.0)
-    track = LandmarkTrack(
-        np.zeros((n, 2), bool),
-        np.full(n, 0.04),
-        np.zeros(n),
-        held,
-        np.full((n, 3), 8.0),
-        geom,
-        OpeningParams(),
-    )
-    return FurtherDemo("corr", replace(run, informative=informative), track, True)
-
-
-@settings(max_examples=40, deadline=None)
-@given(
-    take=st.integers(50, 300),
-    first=st.integers(10, TAKEN_TURN_TICKS + 50),
-    sgn=st.sampled_from([1.0, -1.0]),
-    other=st.integers(0, 40),
-)
-def test_the_person_s_first_turn_soon_after_taking_over_is_the_one_taken_over_for(
-    take: int, first: int, sgn: float, other: int
-) -> None:
-    # a turn still under way when the person takes over (the network's) is not theirs; of the
-    # person's own turns, only the first and only if begun within the window counts
-    a = take + first
-    turns = [(take - 30, take + 5, -sgn), (a, a + 40, sgn), (a + 60 + other, a + 100 + other, -sgn)]
-    got = taken_over_turns(_correction((take, 590), turns), DecisionParams())
-    assert got == ([a] if first < TAKEN_TURN_TICKS else [])
-    assert taken_over_turns(_correction((0, 0), turns), DecisionParams()) == []  # nobody took over
