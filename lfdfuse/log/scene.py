@@ -168,12 +168,14 @@ def encode_arrow_scene(
     sequence of colours, the numbers of every arrow written by one ``orjson.dumps`` of them all."""
     nums: list[float] = []
     colors: list[tuple[float, float, float]] = []
+    hypot, atan2, sin, cos = math.hypot, math.atan2, math.sin, math.cos  # looked up once a message
     for vx, vy, color, scale_m in arrows:
-        length = math.hypot(vx, vy) * scale_m
+        length = hypot(vx, vy) * scale_m
         if length <= 1e-6:
             continue
-        half = math.atan2(vy, vx) / 2  # quat_z's z and w
-        nums += (math.sin(half), math.cos(half), max(length - 0.1, 0.01))
+        half = atan2(vy, vx) / 2  # quat_z's z and w
+        shaft = length - 0.1
+        nums += (sin(half), cos(half), 0.01 if 0.01 > shaft else shaft)  # max(shaft, 0.01)
         colors.append(color)
     key = (entity_id, *map(id, colors))
     known = _SCENES.get(key)

@@ -145,7 +145,10 @@ class NetworkRuntime:
                 achieved_now.append(ended.goal)
         app = outputs.applicable
         if app.shape[0] == 1:  # BehaviorOutputs.bac of the one tick, without its array
-            bac = sum(1 << j for j, a in enumerate(app[0].tolist()) if a)
+            bac = 0
+            for j, a in enumerate(app[0].tolist()):
+                if a:
+                    bac |= 1 << j
         else:
             bac = int(outputs.bac[0])
         if found is None or self.complete:
@@ -156,7 +159,8 @@ class NetworkRuntime:
         weights = row.weights if row is not None else fallback
         vec = outputs.vectors[0].tolist()
         x, y = self._fuse(vec, weights)
-        if row is not None and float(np.hypot(x, y)) <= 1e-9:
+        # hypot(x, y) is at least |x| and |y|: only a vector within 1e-9 on both axes needs it
+        if row is not None and abs(x) <= 1e-9 and abs(y) <= 1e-9 and float(np.hypot(x, y)) <= 1e-9:
             x, y = self._fuse(vec, fallback)
         fused = self._steer(np.array([x, y]), step, cues)
         return Decision(step, path, bac, dict(weights), row is None, fused, tuple(achieved_now))

@@ -112,6 +112,9 @@ _NO_CUES = Cues()
 
 #: a heading this far to a side turns the robot (nearly) on the spot: the speed falls with cos θ
 _ON_THE_SPOT_RAD = math.radians(85.0)
+#: a pull further round than this is behind the robot; past :data:`_TURNING_RAD` it turns round
+_BEHIND_RAD = math.radians(120)
+_TURNING_RAD = math.radians(90)
 
 
 class NetworkStepper:
@@ -279,13 +282,13 @@ class NetworkStepper:
         self.side[self.step_name(dec.path)].append(
             (float(reading.ranges_m[self._il]), float(reading.ranges_m[self._ir]))
         )
-        fx, fy = float(dec.fused[0]), float(dec.fused[1])
-        heading = math.atan2(fy, fx) if (fx, fy) != (0.0, 0.0) else 0.0  # no pull at all: straight on
-        if abs(heading) > math.radians(120) and self._turn != 0.0:
+        fx, fy = dec.fused.tolist()
+        heading = math.atan2(fy, fx) if fx != 0.0 or fy != 0.0 else 0.0  # no pull at all: straight on
+        if abs(heading) > _BEHIND_RAD and self._turn != 0.0:
             # the pull is behind the robot: commit to one turning direction while turning round,
             # instead of dithering as the behind-vector swings from side to side
             heading = math.copysign(abs(heading), self._turn)
-        self._turn = math.copysign(1.0, heading) if abs(heading) > math.radians(90) else 0.0
+        self._turn = math.copysign(1.0, heading) if abs(heading) > _TURNING_RAD else 0.0
         if self.noise > 0:
             heading += float(self.rng.normal(0.0, self.noise))
         if self.safety is not None:
