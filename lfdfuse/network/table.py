@@ -7,6 +7,7 @@ the problem (``network.steps[1].fusion[0].weights.avoid: negative weight``).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import Any
 
@@ -60,10 +61,16 @@ class Step:
     landmark: Landmark | None = None
 
     def row(self, bac: int) -> FusionRow | None:
+        """The first row of ``fusion`` for ``bac`` (None: none)."""
+        return self._rows.get(bac)
+
+    @cached_property
+    def _rows(self) -> dict[int, FusionRow]:
+        """Each BAC's first row, looked up at every tick (twice: the weights, and help)."""
+        rows: dict[int, FusionRow] = {}
         for r in self.fusion:
-            if r.bac == bac:
-                return r
-        return None
+            rows.setdefault(r.bac, r)
+        return rows
 
 
 @dataclass(frozen=True)
