@@ -20,13 +20,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-import numpy as np
-
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.demo_alignment import same_behaviors
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run, estimate_runs
 from lfdfuse.estimate.pooled_subgoals import Verdict, pool_subgoals
-from lfdfuse.estimate.sub_step_corrections import FurtherDemo
+from lfdfuse.estimate.sub_step_corrections import FurtherDemo, taken_over
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.check import CHECK_STARTS, DemoWorld, demo_world
 from lfdfuse.execute.lesson_check import CheckedLesson, checked_lesson
@@ -266,20 +264,6 @@ def _learn_subgoals_pooled(
         built = checked.table
     tell(progress, 1.0, 1.0)
     return LearnResult(built, groups, skipped, res.decisions, tuple(names), fixed, res.verdicts, checked)
-
-
-def taken_over(others: Sequence[FurtherDemo]) -> set[str]:
-    """The goal steps (top-level names) the corrections' persons took over in: the network's step
-    at each one's first informative tick."""
-    out: set[str] = set()
-    for o in others:
-        if not o.correction or o.steps is None:
-            continue
-        ticks = np.nonzero(o.run.informative)[0]
-        at = o.steps[int(ticks[0])] if len(ticks) else None
-        if at is not None:
-            out.add(at.split("/", 1)[0])
-    return out
 
 
 @dataclass(frozen=True)

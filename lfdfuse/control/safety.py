@@ -75,42 +75,54 @@ _BLOCK = 8
 def _nearest_free(rel_rad: float, ranges_m: np.ndarray, angles_rad: np.ndarray, p: SafetyParams) -> float:
     """:func:`free_heading_reference` of a blocked heading, its candidates tested a block at a
     time, nearest first, until one is free (the same arrays, row for row: the same numbers)."""
-    r1 = np.where(np.isfinite(ranges_m) & (ranges_m > 0), ranges_m, 0.0)
-    offsets = np.radians(np.arange(p.step_deg, 90.0 + 1e-9, p.step_deg))
-    first, second = (-offsets, offsets) if rel_rad < 0 else (offsets, -offsets)
-    cands = np.concatenate([[rel_rad], rel_rad + np.column_stack([first, second]).ravel()])
-    r = r1[None, :]
+    r1, cands = _returns(ranges_m), _candidates(rel_rad, p)
     for lo in range(0, len(cands), _BLOCK):
         block = cands[lo : lo + _BLOCK]
-        diff = angles_rad[None, :] - block[:, None]
-        along = r * np.cos(diff)
-        lateral = np.abs(r * np.sin(diff))
-        blocked = ((along > 0) & (along < p.lookahead_m) & (lateral < p.halfwidth_m)).any(axis=1)
-        free = np.nonzero(~blocked)[0]
+        free = np.nonzero(~_blocked(r1, angles_rad, block, p))[0]
         if len(free):
             return float(block[free[0]])
-    return math.copysign(math.pi / 2 + 0.3, rel_rad if rel_rad != 0.0 else 1.0)
+    return _boxed_in(rel_rad)
 
 
 def free_heading_reference(
     rel_rad: float, ranges_m: np.ndarray, angles_rad: np.ndarray, p: SafetyParams = SafetyParams()
 ) -> float:
     """:func:`free_heading` in numpy: the reference."""
-    # no return (inf, NaN, 0) counts as range 0 here, which no strip test accepts (along > 0)
-    r1 = np.where(np.isfinite(ranges_m) & (ranges_m > 0), ranges_m, 0.0)
+    r1 = _returns(ranges_m)
     d1 = angles_rad - rel_rad
     along1 = r1 * np.cos(d1)
     if not ((along1 > 0) & (along1 < p.lookahead_m) & (np.abs(r1 * np.sin(d1)) < p.halfwidth_m)).any():
         return rel_rad  # the common case: the wanted heading is free
+    cands = _candidates(rel_rad, p)
+    free = np.nonzero(~_blocked(r1, angles_rad, cands, p))[0]
+    if len(free) == 0:
+        return _boxed_in(rel_rad)
+    return float(cands[free[0]])
+
+
+def _returns(ranges_m: np.ndarray) -> np.ndarray:
+    """The ranges, with no return (inf, NaN, 0) as range 0, which no strip test accepts (along > 0)."""
+    return np.where(np.isfinite(ranges_m) & (ranges_m > 0), ranges_m, 0.0)
+
+
+def _candidates(rel_rad: float, p: SafetyParams) -> np.ndarray:
+    """The headings tried, nearest first: ``rel_rad``, then every ``step_deg`` to 90° each way,
+    the side of ``rel_rad`` first."""
     offsets = np.radians(np.arange(p.step_deg, 90.0 + 1e-9, p.step_deg))
     first, second = (-offsets, offsets) if rel_rad < 0 else (offsets, -offsets)
-    cands = np.concatenate([[rel_rad], rel_rad + np.column_stack([first, second]).ravel()])
+    return np.concatenate([[rel_rad], rel_rad + np.column_stack([first, second]).ravel()])
+
+
+def _blocked(r1: np.ndarray, angles_rad: np.ndarray, cands: np.ndarray, p: SafetyParams) -> np.ndarray:
+    """Per candidate heading, whether a return lies in its strip (``lookahead_m`` ahead,
+    ``halfwidth_m`` to each side)."""
     diff = angles_rad[None, :] - cands[:, None]
     r = r1[None, :]
     along = r * np.cos(diff)
     lateral = np.abs(r * np.sin(diff))
-    blocked = ((along > 0) & (along < p.lookahead_m) & (lateral < p.halfwidth_m)).any(axis=1)
-    free = np.nonzero(~blocked)[0]
-    if len(free) == 0:
-        return math.copysign(math.pi / 2 + 0.3, rel_rad if rel_rad != 0.0 else 1.0)
-    return float(cands[free[0]])
+    return np.asarray(((along > 0) & (along < p.lookahead_m) & (lateral < p.halfwidth_m)).any(axis=1))
+
+
+def _boxed_in(rel_rad: float) -> float:
+    """Every candidate blocked: turn hard, past 90°, toward ``rel_rad``'s side (left at 0)."""
+    return math.copysign(math.pi / 2 + 0.3, rel_rad if rel_rad != 0.0 else 1.0)

@@ -39,6 +39,20 @@ class FurtherDemo:
     steps: tuple[str | None, ...] | None = None
 
 
+def taken_over(others: Sequence[FurtherDemo]) -> set[str]:
+    """The goal steps (top-level names) the corrections' persons took over in: the network's step
+    at each one's first informative tick."""
+    out: set[str] = set()
+    for o in others:
+        if not o.correction or o.steps is None:
+            continue
+        ticks = np.nonzero(o.run.informative)[0]
+        at = o.steps[int(ticks[0])] if len(ticks) else None
+        if at is not None:
+            out.add(at.split("/", 1)[0])
+    return out
+
+
 def goals_once(run: SegmentedRun) -> SegmentedRun:
     """A correction's run with each goal met once: a goal met again right after it was met (the
     robot lingering at it, its network already after the next goal) starts no goal segment; its
