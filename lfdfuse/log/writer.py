@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import os
 import struct
@@ -18,11 +19,14 @@ from mcap.writer import CompressionType, Writer
 from lfdfuse import __version__
 from lfdfuse.errors import LogError
 from lfdfuse.files import umask
+from lfdfuse.log.chunks import BackgroundChunks
 from lfdfuse.log.messages import PROVENANCE, TOPICS, RawMessage
 from lfdfuse.log.schemas import schema_text
 
 __all__ = ["PROVENANCE", "LogWriter"]
 
+#: a chunk is compressed and written once its records pass this many bytes
+CHUNK_SIZE = 4 * 1024 * 1024
 #: a Message record's head: opcode, record length, channel, sequence, log time, publish time
 _MESSAGE_HEAD = struct.Struct("<BQHIQQ")
 _MESSAGE_OPCODE = 0x05
@@ -160,6 +164,7 @@ class LogWriter:
         self._channels: dict[str, int] = {}
         self._seq: dict[str, int] = {}
         self._messages: _Messages | None = None
+        self._chunks: BackgroundChunks | None = None
 
     def __enter__(self) -> LogWriter:
         parent = self.path.parent if str(self.path.parent) else Path(".")
@@ -171,8 +176,10 @@ class LogWriter:
             raise LogError(f"cannot write {self.path}: {exc.strerror}") from exc
         try:
             self._stream = os.fdopen(fd, "wb")
-            self._writer = Writer(self._stream, compression=CompressionType.ZSTD, chunk_size=4 * 1024 * 1024)
+            self._writer = Writer(self._stream, compression=CompressionType.ZSTD, chunk_size=CHUNK_SIZE)
             self._writer.start(profile="", library=f"lfdfuse {__version__}")
+            # full chunks compressed beside the run (before _Messages, which calls the finaliser)
+            self._chunks = BackgroundChunks.of(self._writer)
             self._messages = _Messages.of(self._writer)
         except BaseException:
             # interrupted here (SIGTERM as the command starts), __exit__ never runs: clean up now
@@ -298,5 +305,10 @@ class LogWriter:
         except OSError as err:
             raise LogError(f"cannot write {self.path}: {err.strerror}") from err
         finally:
+            if self._chunks is not None:
+                self._chunks.close()  # joins a compression a failed finish left running
+            if not self._stream.closed:  # finish failed: the file is dropped, its error kept
+                with contextlib.suppress(OSError):
+                    self._stream.close()
             if os.path.exists(self._tmp):
                 os.unlink(self._tmp)

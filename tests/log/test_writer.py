@@ -103,11 +103,13 @@ def _two_ways(
     as a tick writes them) writes the bytes mcap's public ``add_message`` writes."""
     files = []
     for way in ("one by one", "ticks", "mcap"):
-        if way == "mcap":
+        if way == "mcap":  # mcap's own add_message and chunk finalising
             monkeypatch.setattr(writer._Messages, "of", classmethod(lambda cls, w: None))
+            monkeypatch.setattr(writer.BackgroundChunks, "of", classmethod(lambda cls, w: None))
         path = tmp_path / f"{len(files)}.mcap"
         with LogWriter(path, metadata={"seed": "1"}) as log:
             assert (log._messages is not None) == (way != "mcap")
+            assert (log._chunks is not None) == (way != "mcap")
             if way == "ticks":
                 for t, tick in itertools.groupby(messages, key=lambda m: m[1]):
                     log.write_tick(t, [(topic, data) for topic, _, data in tick])
