@@ -122,6 +122,16 @@ class BehaviorOutputs:
         return np.asarray((self.applicable.astype(np.int64) * bits).sum(axis=1))
 
 
+def made_outputs(
+    names: tuple[str, ...], vectors: np.ndarray, applicable: np.ndarray, goal_met: np.ndarray
+) -> BehaviorOutputs:
+    """``BehaviorOutputs(...)``, the same instance, without the frozen ``__init__``'s
+    ``object.__setattr__`` per field (a live run makes one every tick)."""
+    o = object.__new__(BehaviorOutputs)
+    o.__dict__.update(names=names, vectors=vectors, applicable=applicable, goal_met=goal_met)
+    return o
+
+
 class BehaviorState:
     """The primitives of one behaviour set, with what they carry from scan to scan.
 
@@ -140,6 +150,8 @@ class BehaviorState:
             self.primitives.append(s.make(name, params))
         #: the fused plan of the last block (see :func:`_fused`) and what it was made for
         self.plan: tuple[BehaviorParams, object, tuple[str, ...], np.ndarray | None, _Plan] | None = None
+        #: the columns the fused loop did, and the primitives left to step (in order)
+        self.rest: tuple[frozenset[int], list[tuple[int, Primitive]]] | None = None
 
     def reset(self) -> None:
         for p in self.primitives:
@@ -169,16 +181,17 @@ def compute(
     app = np.zeros((n, k), dtype=bool)
     goal = np.zeros((n, k), dtype=bool)
     done = _fused(scan, state, vec, app, goal) if kernels.POOL.ready() else frozenset()
-    for i, primitive in enumerate(state.primitives):
-        if i in done:
-            continue
+    rest = state.rest
+    if rest is None or rest[0] is not done:  # the primitives left to step, once per plan
+        rest = state.rest = (done, [(i, p) for i, p in enumerate(state.primitives) if i not in done])
+    for i, primitive in rest[1]:
         res = primitive.step(scan)
         a = res.applicable
         vec[:, i] = np.where(a[:, None], res.vector, 0.0)
         app[:, i] = a
         if res.goal is not None:
             goal[:, i] = res.goal
-    return BehaviorOutputs(state.names, vec, app, goal)
+    return made_outputs(state.names, vec, app, goal)
 
 
 _KINDS = {

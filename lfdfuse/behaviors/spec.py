@@ -126,6 +126,34 @@ class Observations:
         )
 
 
+def made_observations(
+    ranges_m: np.ndarray,
+    geometry: ScanGeometry,
+    sonar_m: np.ndarray | None,
+    sonar_angles_rad: np.ndarray | None,
+    sonar_max_m: float,
+    target_names: tuple[str, ...],
+    target_bearing_rad: np.ndarray,
+    target_range_m: np.ndarray,
+    pose: np.ndarray | None,
+) -> Observations:
+    """``Observations(...)``, the same instance, without the frozen ``__init__``'s
+    ``object.__setattr__`` per field (half the cost: a live run makes one every tick)."""
+    o = object.__new__(Observations)
+    o.__dict__.update(
+        ranges_m=ranges_m,
+        geometry=geometry,
+        sonar_m=sonar_m,
+        sonar_angles_rad=sonar_angles_rad,
+        sonar_max_m=sonar_max_m,
+        target_names=target_names,
+        target_bearing_rad=target_bearing_rad,
+        target_range_m=target_range_m,
+        pose=pose,
+    )
+    return o
+
+
 def wrap(a: np.ndarray) -> np.ndarray:
     return np.asarray(np.arctan2(np.sin(a), np.cos(a)))
 

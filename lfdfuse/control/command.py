@@ -37,14 +37,16 @@ def heading_to_command(heading_rad: np.ndarray, p: DriveParams) -> tuple[np.ndar
 
 def heading_command(heading_rad: float, p: DriveParams) -> tuple[float, float]:
     """:func:`heading_to_command` of one heading, as Python floats: the same numbers (numpy's
-    sine, cosine and arc tangent, the clip and the floor as comparisons) without the array work."""
-    th = float(np.arctan2(np.sin(heading_rad), np.cos(heading_rad)))
+    sine, cosine and arc tangent, the clip and the floor as comparisons) without the array work.
+    A heading the wrap leaves as it was (most: within ±π) has the cosine computed already."""
+    cos_h = np.cos(heading_rad)
+    th = float(np.arctan2(np.sin(heading_rad), cos_h))
     omega = p.k_turn * th
     if omega < -p.omega_max_rps:
         omega = -p.omega_max_rps
     elif omega > p.omega_max_rps:
         omega = p.omega_max_rps
-    c = float(np.cos(th))
+    c = float(cos_h) if th == heading_rad else float(np.cos(th))  # ±0: the one cosine, 1
     return p.v_max_mps * (c if c > 0.0 or c != c else 0.0), omega
 
 

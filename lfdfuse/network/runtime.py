@@ -52,6 +52,27 @@ class Decision:
     achieved_now: tuple[str, ...]  # goals achieved at this tick (target names)
 
 
+_new = object.__new__
+
+
+def made_decision(
+    step: Step | None,
+    path: Path,
+    bac: int,
+    weights: dict[str, float],
+    unseen: bool,
+    fused: np.ndarray,
+    achieved_now: tuple[str, ...],
+) -> Decision:
+    """``Decision(...)``, the same instance, without the frozen ``__init__``'s ``object.__setattr__``
+    per field (half the cost, and a decision is made every tick)."""
+    d = _new(Decision)
+    d.__dict__.update(
+        step=step, path=path, bac=bac, weights=weights, unseen=unseen, fused=fused, achieved_now=achieved_now
+    )
+    return d
+
+
 class NetworkRuntime:
     """Owns the goal state of one execution of a fusion table."""
 
@@ -70,6 +91,8 @@ class NetworkRuntime:
         #: whether a step has a landmark: only a landmark decides from the cues (without one,
         #: nothing reads the progress, and it is not kept)
         self.senses = _has_landmark(table.network)
+        #: the BAC of each applicability row of a tick, by its bytes (a few patterns recur)
+        self._bacs: dict[bytes, int] = {}
 
     def active(self) -> tuple[Path, Step] | None:
         """The active fusion step, depth first; None when every goal is achieved."""
@@ -144,15 +167,20 @@ class NetworkRuntime:
             if ended.goal is not None:
                 achieved_now.append(ended.goal)
         app = outputs.applicable
-        if app.shape[0] == 1:  # BehaviorOutputs.bac of the one tick, without its array
-            bac = 0
-            for j, a in enumerate(app[0].tolist()):
-                if a:
-                    bac |= 1 << j
+        if app.shape[0] == 1 and app.dtype == np.bool_:
+            # BehaviorOutputs.bac of the one tick, without its array, once per pattern
+            flags = app[0]
+            key = flags.tobytes()
+            known = self._bacs.get(key)
+            if known is None:
+                if len(self._bacs) >= 4096:
+                    self._bacs.clear()
+                known = self._bacs[key] = sum(1 << j for j, a in enumerate(flags.tolist()) if a)
+            bac = known
         else:
             bac = int(outputs.bac[0])
         if found is None or self.complete:
-            return Decision(None, (), bac, {}, False, np.zeros(2), tuple(achieved_now))
+            return made_decision(None, (), bac, {}, False, np.zeros(2), tuple(achieved_now))
         path, step = found
         row = step.row(bac)
         fallback = step.default_weights if step.default_weights is not None else self.table.default_weights
@@ -163,7 +191,7 @@ class NetworkRuntime:
         if row is not None and abs(x) <= 1e-9 and abs(y) <= 1e-9 and float(np.hypot(x, y)) <= 1e-9:
             x, y = self._fuse(vec, fallback)
         fused = self._steer(np.array([x, y]), step, cues)
-        return Decision(step, path, bac, dict(weights), row is None, fused, tuple(achieved_now))
+        return made_decision(step, path, bac, dict(weights), row is None, fused, tuple(achieved_now))
 
     def _steer(self, fused: np.ndarray, step: Step, cues: Cues) -> np.ndarray:
         """The fused vector, kept to the way a sub-goal step goes (its length kept)."""

@@ -282,3 +282,14 @@ def test_a_landmark_sensed_with_another_lag_is_met_by_that_sensor_alone(
         if met and not any(mine[:k]):  # met at this tick: the turn counts from the held heading now
             assert rt.progress.turned_rad == (held_s if lag else held_d)
             assert rt.progress.lag_m == lag
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.lists(st.booleans(), min_size=4, max_size=4), min_size=1, max_size=30))
+def test_each_ticks_bac_is_its_outputs_bac_pattern_after_pattern(apps: list[list[bool]]) -> None:
+    """The BAC a decision reads off its applicability (once per pattern, then looked up) is
+    ``BehaviorOutputs.bac``, however the patterns repeat."""
+    rt = NetworkRuntime(table())
+    for app in apps:
+        out = outputs(VEC, app)
+        assert rt.decide(out, set()).bac == int(out.bac[0]) == sum(1 << j for j, a in enumerate(app) if a)

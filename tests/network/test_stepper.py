@@ -151,3 +151,39 @@ def test_a_table_with_a_landmark_senses_cues() -> None:
         rng=np.random.default_rng(0),
     )
     assert driver._senses
+
+
+def test_a_ticks_observations_are_those_of_its_detections_in_sight_or_not() -> None:
+    """What the stepper senses each tick is ``Observations.from_detections`` of the reading; a
+    tick with no target in sight shares one all-NaN row, which no one may write to."""
+    from lfdfuse.behaviors.spec import Observations
+
+    world, sensors = load_world("building"), SensorParams()
+    rng = np.random.default_rng(5)
+    driver = NetworkStepper(table=parse_table(TABLE), world=world, sensors=sensors, rng=rng)
+    sim = Simulator(world, rng, sensors=sensors)
+    seen = {True: 0, False: 0}
+    obs = sim.reset(None)
+    for _ in range(1500):
+        got = driver._observations(obs)
+        r = obs.reading
+        want = Observations.from_detections(
+            ranges_m=r.ranges_m[None, :],
+            geometry=driver.geometry,
+            detections=[r.detections],
+            target_names=driver.targets,
+            sonar_m=r.sonar_m[None, :],
+            sonar_angles_rad=driver.sonar_angles,
+            sonar_max_m=sensors.sonar.max_range_m,
+            pose=np.array([obs.pose.as_tuple()]),
+        )
+        for f in ("ranges_m", "sonar_m", "target_bearing_rad", "target_range_m", "pose"):
+            assert np.array_equal(getattr(got, f), getattr(want, f), equal_nan=True), f
+        assert got.target_names == want.target_names
+        in_sight = bool(r.detections)
+        seen[in_sight] += 1
+        if not in_sight:
+            with pytest.raises(ValueError, match="read-only"):
+                got.target_bearing_rad[0, 0] = 0.0
+        obs = sim.step(*driver.command(obs))
+    assert seen[True] and seen[False]  # both kinds of tick were checked
