@@ -28,6 +28,7 @@ from lfdfuse.behaviors.spec import (
     Primitive,
     Scan,
     distinct_beams,
+    sees_none,
 )
 from lfdfuse.errors import ConfigError
 
@@ -333,7 +334,9 @@ def _fused(
             app,
         )
     cols = plan.attract_cols
-    if cols and scan.n == 1:
+    if cols and sees_none(obs):
+        pass  # a live tick that sees no target: every attract column stays zero, as below
+    elif cols and scan.n == 1:
         # one scan (a live tick): the targets seen, one by one, the same numbers (numpy's sine
         # and cosine of each bearing); a target not seen leaves its column zero, as below
         bearing, rng = obs.target_bearing_rad[0].tolist(), obs.target_range_m[0].tolist()

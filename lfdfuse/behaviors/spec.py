@@ -126,6 +126,26 @@ class Observations:
         )
 
 
+#: the ``(1, T)`` target rows of a tick with no target in sight: all NaN, read-only, one per T
+_UNSEEN: dict[int, np.ndarray] = {}
+
+
+def unseen(targets: int) -> np.ndarray:
+    """The one all-NaN ``(1, targets)`` row, read-only: the bearings and ranges of a live tick
+    that sees no target (a primitive knows it by identity and skips its targets)."""
+    row = _UNSEEN.get(targets)
+    if row is None:
+        row = _UNSEEN[targets] = np.full((1, targets), np.nan)
+        row.flags.writeable = False
+    return row
+
+
+def sees_none(obs: Observations) -> bool:
+    """Whether ``obs`` is a live tick's that sees no target: its rows are :func:`unseen`'s."""
+    rows = obs.target_bearing_rad
+    return rows is obs.target_range_m and rows is _UNSEEN.get(rows.shape[1])
+
+
 def made_observations(
     ranges_m: np.ndarray,
     geometry: ScanGeometry,

@@ -22,7 +22,7 @@ import numpy as np
 from lfdfuse.behaviors import kernels
 from lfdfuse.behaviors.openings import OpeningSensor, ahead_bearings, ahead_range
 from lfdfuse.behaviors.primitives import BehaviorParams, BehaviorState, Observations, compute
-from lfdfuse.behaviors.spec import attract_target, made_observations
+from lfdfuse.behaviors.spec import attract_target, made_observations, unseen
 from lfdfuse.control.command import heading_command
 from lfdfuse.control.safety import SafetyParams, free_heading
 from lfdfuse.errors import ConfigError
@@ -175,8 +175,7 @@ class NetworkStepper:
         self._target_names = tuple(self.targets)
         self._column = {name: i for i, name in enumerate(self._target_names)}
         self._no_targets = np.full((1, len(self.targets)), np.nan)
-        self._unseen = self._no_targets.copy()
-        self._unseen.flags.writeable = False
+        self._unseen = unseen(len(self.targets))
         self._step_names: dict[tuple[int, ...], str] = {}
         #: every request for help, in order (one when a condition begins, not every tick it lasts)
         self.help: list[HelpRequest] = []
@@ -250,7 +249,7 @@ class NetworkStepper:
                 j = self._column.get(d.name)
                 if j is not None:
                     bearing[0, j], rng[0, j] = d.bearing_rad, d.range_m
-        else:  # no target in sight (most ticks): the one all-NaN row, read-only
+        else:  # no target in sight (most ticks): the one all-NaN row, read-only (spec.unseen)
             bearing = rng = self._unseen
         ranges = reading.ranges_m[None, :]
         sonar = reading.sonar_m[None, :] if len(reading.sonar_m) else None  # a robot without sonar

@@ -166,3 +166,34 @@ def test_bac_is_the_bit_mask() -> None:
     )
     assert out.applicable[0].tolist() == [True, True, True, True, False]
     assert int(out.bac[0]) == 1 + 2 + 4 + 8
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 10_000), preset=st.sampled_from(["scenario1", "scenario3", "full"]))
+def test_a_tick_that_sees_no_target_computes_as_its_nan_rows_do(seed: int, preset: str) -> None:
+    """The shared read-only row of a live tick with no target in sight (``spec.unseen``, which
+    ``compute`` knows by identity and skips the targets of) gives the outputs of NaN rows."""
+    from dataclasses import replace
+
+    from lfdfuse.behaviors.spec import sees_none, unseen
+
+    g = ScanGeometry(-math.pi / 2, math.pi / 180, 181, 30.0)
+    rng = np.random.default_rng(seed)
+    names = resolve_behaviors(preset, ["red", "blue"])
+    nan = np.full((1, 2), np.nan)
+    base = Observations.from_detections(
+        ranges_m=_messy_ranges(rng, 1, 181, 30.0),
+        geometry=g,
+        detections=[()],
+        target_names=["red", "blue"],
+        sonar_m=rng.uniform(0.1, 6.0, (1, 8)),
+        sonar_angles_rad=SONAR.angles,
+        sonar_max_m=5.0,
+    )
+    row = unseen(2)
+    shared = replace(base, target_bearing_rad=row, target_range_m=row)
+    plain = replace(base, target_bearing_rad=nan, target_range_m=nan.copy())
+    assert sees_none(shared) and not sees_none(plain) and unseen(2) is row and not row.flags.writeable
+    a, b = compute(shared, names), compute(plain, names)
+    for f in ("vectors", "applicable", "goal_met"):
+        assert getattr(a, f).tobytes() == getattr(b, f).tobytes()
