@@ -9,6 +9,8 @@ row for, or an unidentifiable row).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import orjson
 
 from lfdfuse.behaviors import catalogue
@@ -17,6 +19,9 @@ from lfdfuse.log import messages as msg
 from lfdfuse.log.writer import LogWriter
 from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.robot.readings import Observation
+
+#: an arrow of the overlay: the behaviour's column, its weight and its colour
+_Drawn = tuple[int, float, tuple[float, float, float]]
 
 
 class LfdRecorder:
@@ -34,31 +39,28 @@ class LfdRecorder:
         for topic, schema in lfd.EXECUTE_TOPICS.items():
             log.add_topic(topic, schema)
         self.behaviors = lfd_tick.BehaviorsEncoder(driver.table.behaviors)
-        #: per set of weights (their names in order and the ids of their very number objects):
-        #: the numbers, and the JSON of them as ``/lfd/fused`` rounds them
-        self._weights: dict[tuple[object, ...], tuple[tuple[float, ...], bytes]] = {}
+        #: per set of weights (a decision's, the same object every tick its row is used; the
+        #: entry keeps it, so its id stays its own): the JSON of them as ``/lfd/fused`` rounds
+        #: them, and per BAC the overlay's arrows drawn (column, weight, colour)
+        self._weights: dict[int, tuple[Mapping[str, float], bytes, dict[int, list[_Drawn]]]] = {}
         #: ``/lfd/bac`` after its timestamp, per BAC and applicability
-        self._bacs: dict[tuple[int, tuple[bool, ...]], bytes] = {}
+        self._bacs: dict[int, bytes] = {}
         #: ``/lfd/step`` after its timestamp as of the last tick, and what it was made of
         self._step: tuple[object, bytes] = (None, b"")
         #: the goals achieved so far (``driver.reached``'s, as of its length then)
         self._achieved: tuple[int, list[str]] = (0, [])
 
-    def _rounded_json(self, weights: dict[str, float]) -> bytes:
-        """The JSON of ``weights`` rounded as :func:`~lfdfuse.log.lfd.encode_fused` rounds them;
-        made once per set of weights: the same names in the same order holding the same number
-        objects (a decision copies its row's dict, not its numbers; the entry keeps the numbers,
-        so their ids stay theirs)."""
-        key = (*weights, *map(id, weights.values()))
-        known = self._weights.get(key)
-        if known is None:
+    def _of_weights(
+        self, weights: Mapping[str, float]
+    ) -> tuple[Mapping[str, float], bytes, dict[int, list[_Drawn]]]:
+        """The entry of ``weights`` (see ``_weights``), made the first time they are decided with."""
+        known = self._weights.get(id(weights))
+        if known is None or known[0] is not weights:
             if len(self._weights) >= 1024:
                 self._weights.clear()
-            known = self._weights[key] = (
-                tuple(weights.values()),
-                orjson.dumps(lfd_tick.rounded_weights(weights)),
-            )
-        return known[1]
+            rounded = orjson.dumps(lfd_tick.rounded_weights(weights))
+            known = self._weights[id(weights)] = (weights, rounded, {})
+        return known
 
     def _achieved_goals(self) -> list[str]:
         reached = self.driver.reached
@@ -78,12 +80,11 @@ class LfdRecorder:
         applicable = out.applicable[0].tolist()
         head = lfd_tick.stamp_head(t_ns)
         tick = [("/lfd/behaviors", self.behaviors.encode(t_ns, xy, applicable, out.goal_met[0].tolist()))]
-        key = (dec.bac, tuple(applicable))
-        bac = self._bacs.get(key)
+        bac = self._bacs.get(dec.bac)  # the BAC is the applicability, bit for bit
         if bac is None:
             if len(self._bacs) >= 4096:
                 self._bacs.clear()
-            bac = self._bacs[key] = lfd_tick.tail_of(
+            bac = self._bacs[dec.bac] = lfd_tick.tail_of(
                 lfd_tick.bac_dict(t_ns, dec.bac, [n for j, n in enumerate(names) if applicable[j]])
             )
         tick.append(("/lfd/bac", head + bac))
@@ -106,16 +107,18 @@ class LfdRecorder:
             )
         tick.append(("/lfd/step", head + self._step[1]))
         fx, fy = dec.fused.tolist()
-        weights, colors = dec.weights, self.colors
+        weights = dec.weights
+        _, rounded, by_bac = self._of_weights(weights)
         x, y = lfd_tick.numbers([fx, fy])
-        fused = b"".join((head, b',"x":', x, b',"y":', y, b',"weights":', self._rounded_json(weights), b"}"))
+        fused = b"".join((head, b',"x":', x, b',"y":', y, b',"weights":', rounded, b"}"))
         tick.append(("/lfd/fused", fused))
-        arrows = [
-            # the behaviour's colour in every figure
-            (weights[n] * xy[j][0], weights[n] * xy[j][1], colors[n], 1.5)
-            for j, n in enumerate(names)
-            if applicable[j] and n in weights
-        ]
+        drawn = by_bac.get(dec.bac)
+        if drawn is None:  # the weighted applicable behaviours, each in its colour in every figure
+            colors = self.colors
+            drawn = by_bac[dec.bac] = [
+                (j, weights[n], colors[n]) for j, n in enumerate(names) if applicable[j] and n in weights
+            ]
+        arrows = [(w * xy[j][0], w * xy[j][1], color, 1.5) for j, w, color in drawn]
         arrows.append((fx, fy, (1.0, 1.0, 1.0), 1.5))
         tick.append(("/lfd/overlay", msg.encode_arrow_scene(t_ns, "fusion", arrows)))
         ask = driver.help_now

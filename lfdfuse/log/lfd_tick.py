@@ -7,7 +7,7 @@ per row): one layout, so the bytes are the codecs' bytes.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import orjson
@@ -52,7 +52,7 @@ def step_dict(
     }
 
 
-def rounded_weights(weights: dict[str, float]) -> dict[str, float]:
+def rounded_weights(weights: Mapping[str, float]) -> dict[str, float]:
     """The weights as ``/lfd/fused`` carries them: rounded to 1e-4."""
     return {k: round(v, 4) for k, v in weights.items()}
 

@@ -14,7 +14,9 @@ A") needs it reached twice, in order; a goal once achieved stays achieved.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 
@@ -46,20 +48,23 @@ class Decision:
     step: Step | None  # the active fusion step (None: task complete)
     path: Path  # its position in the (nested) network
     bac: int
-    weights: dict[str, float]
+    #: the weights fused (a read-only view of the row's own, the same object every tick it is used)
+    weights: Mapping[str, float]
     unseen: bool  # True when the BAC had no row and the default weights were used
     fused: np.ndarray  # (2,) robot-frame fused vector
     achieved_now: tuple[str, ...]  # goals achieved at this tick (target names)
 
 
 _new = object.__new__
+#: the weights of a decision with no step (the task complete)
+_NO_WEIGHTS: Mapping[str, float] = MappingProxyType({})
 
 
 def made_decision(
     step: Step | None,
     path: Path,
     bac: int,
-    weights: dict[str, float],
+    weights: Mapping[str, float],
     unseen: bool,
     fused: np.ndarray,
     achieved_now: tuple[str, ...],
@@ -93,6 +98,9 @@ class NetworkRuntime:
         self.senses = _has_landmark(table.network)
         #: the BAC of each applicability row of a tick, by its bytes (a few patterns recur)
         self._bacs: dict[bytes, int] = {}
+        #: a read-only view of each set of weights decided with (by the id of the table's dict,
+        #: which the entry keeps): a decision's weights are the same object tick after tick
+        self._views: dict[int, tuple[dict[str, float], Mapping[str, float]]] = {}
 
     def active(self) -> tuple[Path, Step] | None:
         """The active fusion step, depth first; None when every goal is achieved."""
@@ -180,7 +188,7 @@ class NetworkRuntime:
         else:
             bac = int(outputs.bac[0])
         if found is None or self.complete:
-            return made_decision(None, (), bac, {}, False, np.zeros(2), tuple(achieved_now))
+            return made_decision(None, (), bac, _NO_WEIGHTS, False, np.zeros(2), tuple(achieved_now))
         path, step = found
         row = step.row(bac)
         fallback = step.default_weights if step.default_weights is not None else self.table.default_weights
@@ -191,7 +199,10 @@ class NetworkRuntime:
         if row is not None and abs(x) <= 1e-9 and abs(y) <= 1e-9 and float(np.hypot(x, y)) <= 1e-9:
             x, y = self._fuse(vec, fallback)
         fused = self._steer(np.array([x, y]), step, cues)
-        return made_decision(step, path, bac, dict(weights), row is None, fused, tuple(achieved_now))
+        view = self._views.get(id(weights))
+        if view is None or view[0] is not weights:
+            view = self._views[id(weights)] = (weights, MappingProxyType(weights))
+        return made_decision(step, path, bac, view[1], row is None, fused, tuple(achieved_now))
 
     def _steer(self, fused: np.ndarray, step: Step, cues: Cues) -> np.ndarray:
         """The fused vector, kept to the way a sub-goal step goes (its length kept)."""
@@ -244,13 +255,13 @@ class NetworkRuntime:
             self.progress.waiting[side] = True
         return None
 
-    def fuse(self, outputs: BehaviorOutputs, weights: dict[str, float]) -> np.ndarray:
+    def fuse(self, outputs: BehaviorOutputs, weights: Mapping[str, float]) -> np.ndarray:
         """``Σ w·v`` over the weighted behaviours (in Python floats: the same sums, in order,
         without a numpy call per behaviour)."""
         x, y = self._fuse(outputs.vectors[0].tolist(), weights)
         return np.array([x, y])
 
-    def _fuse(self, vec: list[list[float]], weights: dict[str, float]) -> tuple[float, float]:
+    def _fuse(self, vec: list[list[float]], weights: Mapping[str, float]) -> tuple[float, float]:
         """:meth:`fuse` of the output vectors ``vec (K, 2)`` as Python lists."""
         column = self._column
         x = y = 0.0
