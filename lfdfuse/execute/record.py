@@ -20,7 +20,8 @@ from lfdfuse.log.writer import LogWriter
 from lfdfuse.network.stepper import NetworkStepper
 from lfdfuse.robot.readings import Observation
 
-#: an arrow of the overlay: the behaviour's column, its weight and its colour
+#: an arrow of the overlay: where the behaviour's x is in the tick's flat list of vectors (twice
+#: its column), its weight and its colour
 _Drawn = tuple[int, float, tuple[float, float, float]]
 
 
@@ -41,7 +42,7 @@ class LfdRecorder:
         self.behaviors = lfd_tick.BehaviorsEncoder(driver.table.behaviors)
         #: per set of weights (a decision's, the same object every tick its row is used; the
         #: entry keeps it, so its id stays its own): the JSON of them as ``/lfd/fused`` rounds
-        #: them, and per BAC the overlay's arrows drawn (column, weight, colour)
+        #: them, and per BAC the overlay's arrows drawn (see ``_Drawn``)
         self._weights: dict[int, tuple[Mapping[str, float], bytes, dict[int, list[_Drawn]]]] = {}
         #: ``/lfd/bac`` after its timestamp, per BAC and applicability
         self._bacs: dict[int, bytes] = {}
@@ -76,10 +77,13 @@ class LfdRecorder:
         if dec is None or out is None:
             return
         names = driver.table.behaviors
-        xy = out.vectors[0].round(6).tolist()  # Python floats: the same numbers as float(vec[j, i])
+        # x0, y0, x1, y1, ... as Python floats: the same numbers as float(vec[j, i])
+        xy = out.vectors[0].round(6).ravel().tolist()
         applicable = out.applicable[0].tolist()
         head = lfd_tick.stamp_head(t_ns)
-        tick = [("/lfd/behaviors", self.behaviors.encode(t_ns, xy, applicable, out.goal_met[0].tolist()))]
+        tick = [
+            ("/lfd/behaviors", self.behaviors.encode_flat(t_ns, xy, applicable, out.goal_met[0].tolist()))
+        ]
         bac = self._bacs.get(dec.bac)  # the BAC is the applicability, bit for bit
         if bac is None:
             if len(self._bacs) >= 4096:
@@ -116,9 +120,9 @@ class LfdRecorder:
         if drawn is None:  # the weighted applicable behaviours, each in its colour in every figure
             colors = self.colors
             drawn = by_bac[dec.bac] = [
-                (j, weights[n], colors[n]) for j, n in enumerate(names) if applicable[j] and n in weights
+                (2 * j, weights[n], colors[n]) for j, n in enumerate(names) if applicable[j] and n in weights
             ]
-        arrows = [(w * xy[j][0], w * xy[j][1], color, 1.5) for j, w, color in drawn]
+        arrows = [(w * xy[i], w * xy[i + 1], color, 1.5) for i, w, color in drawn]
         arrows.append((fx, fy, (1.0, 1.0, 1.0), 1.5))
         tick.append(("/lfd/overlay", msg.encode_arrow_scene(t_ns, "fusion", arrows)))
         ask = driver.help_now

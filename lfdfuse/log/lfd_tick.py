@@ -113,6 +113,20 @@ class BehaviorsEncoder:
         flat = orjson.dumps(xy).replace(b"[", b"").replace(b"]", b"").split(b",") if k else []
         if len(flat) != 2 * k:  # not (K, 2)
             return encode_behavior_lists(t_ns, self.names, xy, applicable, goal_met)
+        return self._filled(t_ns, flat, applicable, goal_met)
+
+    def encode_flat(self, t_ns: int, xy: list[float], applicable: list[bool], goal_met: list[bool]) -> bytes:
+        """:meth:`encode` of the vectors as one flat list ``x0, y0, x1, y1, …`` (a ``(K, 2)``
+        array's ``ravel().tolist()``): the same bytes, one nesting less to write and undo."""
+        k = len(self.names)
+        if len(xy) != 2 * k or len(applicable) != k or len(goal_met) != k:
+            return encode_behavior_lists(
+                t_ns, self.names, [xy[i : i + 2] for i in range(0, len(xy), 2)], applicable, goal_met
+            )
+        return self._filled(t_ns, orjson.dumps(xy)[1:-1].split(b",") if k else [], applicable, goal_met)
+
+    def _filled(self, t_ns: int, flat: list[bytes], applicable: list[bool], goal_met: list[bool]) -> bytes:
+        """The message of this pattern's format, filled with the numbers as orjson writes them."""
         key = (*applicable, *goal_met)
         fmt = self._formats.get(key)
         if fmt is None:

@@ -98,9 +98,10 @@ class NetworkRuntime:
         self.senses = _has_landmark(table.network)
         #: the BAC of each applicability row of a tick, by its bytes (a few patterns recur)
         self._bacs: dict[bytes, int] = {}
-        #: a read-only view of each set of weights decided with (by the id of the table's dict,
-        #: which the entry keeps): a decision's weights are the same object tick after tick
-        self._views: dict[int, tuple[dict[str, float], Mapping[str, float]]] = {}
+        #: per set of weights decided with (by the id of the table's dict, which the entry keeps):
+        #: a read-only view of it (a decision's weights are the same object tick after tick) and
+        #: its (column, weight) pairs in its order, what :meth:`_fuse` sums
+        self._views: dict[int, tuple[dict[str, float], Mapping[str, float], list[tuple[int, float]]]] = {}
 
     def active(self) -> tuple[Path, Step] | None:
         """The active fusion step, depth first; None when every goal is achieved."""
@@ -193,15 +194,21 @@ class NetworkRuntime:
         row = step.row(bac)
         fallback = step.default_weights if step.default_weights is not None else self.table.default_weights
         weights = row.weights if row is not None else fallback
+        view = self._views.get(id(weights))
+        if view is None or view[0] is not weights:
+            column = self._column
+            pairs = [(column[name], w) for name, w in weights.items()]
+            view = self._views[id(weights)] = (weights, MappingProxyType(weights), pairs)
         vec = outputs.vectors[0].tolist()
-        x, y = self._fuse(vec, weights)
+        x = y = 0.0
+        for c, w in view[2]:  # _fuse of the weights, their columns looked up once
+            vx, vy = vec[c]
+            x += w * vx
+            y += w * vy
         # hypot(x, y) is at least |x| and |y|: only a vector within 1e-9 on both axes needs it
         if row is not None and abs(x) <= 1e-9 and abs(y) <= 1e-9 and float(np.hypot(x, y)) <= 1e-9:
             x, y = self._fuse(vec, fallback)
         fused = self._steer(np.array([x, y]), step, cues)
-        view = self._views.get(id(weights))
-        if view is None or view[0] is not weights:
-            view = self._views[id(weights)] = (weights, MappingProxyType(weights))
         return made_decision(step, path, bac, view[1], row is None, fused, tuple(achieved_now))
 
     def _steer(self, fused: np.ndarray, step: Step, cues: Cues) -> np.ndarray:

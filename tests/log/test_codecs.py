@@ -384,6 +384,10 @@ def test_the_list_encoders_write_what_the_classes_write(
     assert lfd.encode_behaviors(t, names, vec, app, goal) == row
     assert lfd_tick.encode_behavior_lists(t, names, vec.tolist(), app.tolist(), goal.tolist()) == row
     assert lfd_tick.BehaviorsEncoder(names).encode(t, vec.tolist(), app.tolist(), goal.tolist()) == row
+    assert (
+        lfd_tick.BehaviorsEncoder(names).encode_flat(t, vec.ravel().tolist(), app.tolist(), goal.tolist())
+        == row
+    )
     bac = data.draw(st.integers(0, 2**62))
     want = lfd.Bac(t, bac, names).encode()
     assert lfd.encode_bac(t, bac, list(names)) == want
@@ -421,7 +425,10 @@ def test_the_spliced_encoders_write_the_dict_encoders_bytes_for_any_number(
     app = data.draw(st.lists(st.booleans(), min_size=k, max_size=k))
     goal = data.draw(st.lists(st.booleans(), min_size=k, max_size=k))
     want = orjson.dumps(lfd_tick.behaviors_dict(t, names, xy, app, goal))
-    assert lfd_tick.BehaviorsEncoder(names).encode(t, xy, app, goal) == want
+    encoder = lfd_tick.BehaviorsEncoder(names)
+    assert encoder.encode(t, xy, app, goal) == want
+    # the same vectors as one flat list (x0, y0, x1, ...), as the execute recorder hands them
+    assert encoder.encode_flat(t, [v for p in xy for v in p], app, goal) == want
     nums = data.draw(st.lists(ANY_REAL, max_size=6))
     assert lfd_tick.numbers(nums) == [orjson.dumps(v) for v in nums]
     arrows = data.draw(st.lists(st.tuples(ANY_REAL, ANY_REAL, COLOR, st.floats(0.0, 3.0) | EDGE), max_size=6))
