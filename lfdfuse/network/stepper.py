@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from lfdfuse.behaviors import kernels
+from lfdfuse.behaviors.catalogue import spec_of
 from lfdfuse.behaviors.openings import OpeningSensor, ahead_bearings, ahead_range
 from lfdfuse.behaviors.primitives import BehaviorParams, BehaviorState, Observations, compute
 from lfdfuse.behaviors.spec import attract_target, made_observations, unseen
@@ -176,6 +177,11 @@ class NetworkStepper:
         self._column = {name: i for i, name in enumerate(self._target_names)}
         self._no_targets = np.full((1, len(self.targets)), np.nan)
         self._unseen = unseen(len(self.targets))
+        #: whether a behaviour of the table reads odometry (its spec says so): else no tick's
+        #: observations carry the pose, which no primitive of the set would read
+        self._odometry = any(
+            spec is None or "odometry" in spec.inputs for spec in map(spec_of, table.behaviors)
+        )
         self._step_names: dict[tuple[int, ...], str] = {}
         #: every request for help, in order (one when a condition begins, not every tick it lasts)
         self.help: list[HelpRequest] = []
@@ -265,7 +271,7 @@ class NetworkStepper:
             self._target_names,
             bearing,
             rng,
-            np.array([[p.x, p.y, p.theta]], dtype=np.float64),
+            np.array([[p.x, p.y, p.theta]], dtype=np.float64) if self._odometry else None,
         )
 
     def command(self, observation: Observation) -> tuple[float, float]:

@@ -220,3 +220,21 @@ def test_a_state_is_for_one_behaviour_set() -> None:
     state = BehaviorState(["avoid"], BehaviorParams())
     with pytest.raises(Exception, match="another behaviour set"):
         compute(obs, ["avoid", "wander"], BehaviorParams(), state)
+
+
+def test_a_primitive_that_reads_the_pose_says_it_reads_odometry() -> None:
+    """A live tick carries the pose only to a behaviour set with an ``odometry`` input (the
+    stepper leaves it out otherwise): every library module whose primitives read it declares it."""
+    import importlib
+    import pkgutil
+
+    import lfdfuse.behaviors.library as library
+
+    readers = 0
+    for info in pkgutil.iter_modules(library.__path__):
+        module = importlib.import_module(f"{library.__name__}.{info.name}")
+        source = Path(module.__file__ or "").read_text()
+        if ".pose" in source:
+            readers += 1
+            assert all("odometry" in spec.inputs for spec in module.SPECS), info.name
+    assert readers >= 1  # follow

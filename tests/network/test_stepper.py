@@ -153,14 +153,20 @@ def test_a_table_with_a_landmark_senses_cues() -> None:
     assert driver._senses
 
 
-def test_a_ticks_observations_are_those_of_its_detections_in_sight_or_not() -> None:
+@pytest.mark.parametrize("follow", [False, True])
+def test_a_ticks_observations_are_those_of_its_detections_in_sight_or_not(follow: bool) -> None:
     """What the stepper senses each tick is ``Observations.from_detections`` of the reading; a
-    tick with no target in sight shares one all-NaN row, which no one may write to."""
+    tick with no target in sight shares one all-NaN row, which no one may write to; the pose
+    only where a behaviour reads odometry (``follow``)."""
     from lfdfuse.behaviors.spec import Observations
 
     world, sensors = load_world("building"), SensorParams()
     rng = np.random.default_rng(5)
-    driver = NetworkStepper(table=parse_table(TABLE), world=world, sensors=sensors, rng=rng)
+    table = copy.deepcopy(TABLE)
+    if follow:
+        table["behaviors"].append("follow")
+    driver = NetworkStepper(table=parse_table(table), world=world, sensors=sensors, rng=rng)
+    assert driver._odometry == follow
     sim = Simulator(world, rng, sensors=sensors)
     seen = {True: 0, False: 0}
     obs = sim.reset(None)
@@ -177,8 +183,12 @@ def test_a_ticks_observations_are_those_of_its_detections_in_sight_or_not() -> N
             sonar_max_m=sensors.sonar.max_range_m,
             pose=np.array([obs.pose.as_tuple()]),
         )
-        for f in ("ranges_m", "sonar_m", "target_bearing_rad", "target_range_m", "pose"):
+        for f in ("ranges_m", "sonar_m", "target_bearing_rad", "target_range_m"):
             assert np.array_equal(getattr(got, f), getattr(want, f), equal_nan=True), f
+        if follow:
+            assert got.pose is not None and np.array_equal(got.pose, want.pose)
+        else:
+            assert got.pose is None  # no behaviour of the set reads it
         assert got.target_names == want.target_names
         in_sight = bool(r.detections)
         seen[in_sight] += 1
