@@ -15,8 +15,10 @@ from lfdfuse.robot.readings import ScanGeometry
 
 
 def _same(made: object, built: object) -> None:
-    """Equal, with every field and nothing else, the same repr, and still frozen."""
+    """Equal, with every field and nothing else, the same repr, and still frozen; the class
+    checks nothing in ``__post_init__`` (which making it without ``__init__`` would skip)."""
     assert type(made) is type(built)
+    assert not hasattr(type(built), "__post_init__")
     assert made == built and repr(made) == repr(built)
     names = [f.name for f in dataclasses.fields(built)]  # type: ignore[arg-type]
     assert list(vars(made)) == names
