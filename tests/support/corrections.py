@@ -61,6 +61,9 @@ STOP_M = 0.3  # the teacher's place at a goal is driven to within this ...
 #: goal at the first tick its camera could, at the edge of the camera's reach
 INTO_GOAL_M = 0.3
 SPEED_MPS = 0.4
+#: a person who corrected a run watches it on and takes over again where the network leaves the
+#: teacher's path again: at most this many takeovers in one correction
+TAKEOVERS = 2
 
 
 @dataclass(frozen=True)
@@ -214,15 +217,20 @@ def _resumed(
 
 class PathPerson:
     """An input source: from ``plan.take_s`` a Twist each period toward the path ``lookahead``
-    ahead (pure pursuit on the session's last pose), a hand-back at the path's end."""
+    ahead (pure pursuit on the session's last pose), a hand-back at the path's end; then the
+    next of ``then`` (a person who watches on and takes over again), if any."""
 
-    def __init__(self, plan: CorrectionPlan) -> None:
+    def __init__(self, plan: CorrectionPlan, then: Sequence[CorrectionPlan] = ()) -> None:
         self.plan = plan
+        self.then = list(then)
         self.session: TeleopSession | None = None
         self._at = 0
         self.done = False
+        self.handed_back_s: float | None = None  # when the last plan was handed back
 
     def poll(self, t_s: float) -> list[Input]:
+        if self.done and self.then:
+            self.plan, self.then, self._at, self.done = self.then[0], self.then[1:], 0, False
         if self.done or t_s < self.plan.take_s - 1e-9 or self.session is None:
             return []
         snap = self.session.snapshot
@@ -235,6 +243,7 @@ class PathPerson:
         self._at = near
         if near >= len(path) - 3:
             self.done = True
+            self.handed_back_s = t_s
             return [Input("handback", "path driven", SOURCE)]
         stop = next((g for g in self.plan.stops if g >= near), None)
         if stop is not None and d[stop] < STOP_M:
@@ -251,6 +260,23 @@ class PathPerson:
         return [Input("message", twist_payload(v, w), SOURCE, TWIST_SCHEMA)]
 
 
+def _plan_of(log: Path, teacher_xy: np.ndarray, goals_at: Sequence[int]) -> CorrectionPlan | None:
+    """Where a person takes over the run of ``log`` (:func:`correction_plan`; None: it never left
+    the teacher's path, or the log has no poses)."""
+    run = read_run(log)
+    if run.pose is None:
+        return None
+    dt_s = float(np.median(np.diff(run.t_ns))) / 1e9
+    achieved = [
+        len(lfd.NetworkStep.decode(data).achieved)
+        for *_, data in iter_messages(log, topics=[lfd.NetworkStep.TOPIC])
+    ]
+    reached_at = [
+        next(i for i, n in enumerate(achieved) if n >= k) for k in range(1, max(achieved, default=0) + 1)
+    ]
+    return correction_plan(teacher_xy, np.asarray(run.pose[:, :2]), dt_s, goals_at, reached_at)
+
+
 def record_correction(
     table: FusionTable,
     *,
@@ -262,32 +288,32 @@ def record_correction(
     max_time_s: float,
     out: Path,
     goals_at: Sequence[int] = (),
+    takeovers: int = TAKEOVERS,
 ) -> Path | None:
     """Correct ``table``'s failed run (its log ``failed_log``, from ``start`` with ``seed``) with a
     :class:`PathPerson`; returns the segmented correction log, or None when the run never left
-    the teacher's path (nothing to correct there)."""
-    run = read_run(failed_log)
-    if run.pose is None:
-        return None
-    dt_s = float(np.median(np.diff(run.t_ns))) / 1e9
-    achieved = [
-        len(lfd.NetworkStep.decode(data).achieved)
-        for *_, data in iter_messages(failed_log, topics=[lfd.NetworkStep.TOPIC])
-    ]
-    reached_at = [
-        next(i for i, n in enumerate(achieved) if n >= k) for k in range(1, max(achieved, default=0) + 1)
-    ]
-    plan = correction_plan(teacher_xy, np.asarray(run.pose[:, :2]), dt_s, goals_at, reached_at)
+    the teacher's path (nothing to correct there). The person watches on after handing back:
+    where the network leaves the teacher's path again, they take over there too (the run
+    recorded again, tick for tick the same until then), up to ``takeovers`` times in all."""
+    plan = _plan_of(failed_log, teacher_xy, goals_at)
     if plan is None:
         return None
-    opts = TeleopOptions(
-        world=world, input_name="script:path-person", seed=seed, start=start, duration_s=max_time_s
-    )
-    person = PathPerson(plan)
-    driver = correction_driver(opts, table)
-    session = make_session(opts, inputs=[person], clock=SimClock(), network=driver)
-    person.session = session
-    correct(opts, session=session, driver=driver, table_name="table.yaml", out=out)
+    plans = [plan]
+    while True:
+        opts = TeleopOptions(
+            world=world, input_name="script:path-person", seed=seed, start=start, duration_s=max_time_s
+        )
+        person = PathPerson(plans[0], plans[1:])
+        driver = correction_driver(opts, table)
+        session = make_session(opts, inputs=[person], clock=SimClock(), network=driver)
+        person.session = session
+        correct(opts, session=session, driver=driver, table_name="table.yaml", out=out)
+        if driver.done or len(plans) >= takeovers or person.handed_back_s is None:
+            break
+        again = _plan_of(out, teacher_xy, goals_at)
+        if again is None or again.take_s <= person.handed_back_s:
+            break  # the network drove on along the path, or left it only where the person drove
+        plans.append(again)
     seg = out.with_suffix(".seg.mcap")
     segment_file(out, out=seg, behaviors=",".join(table.behaviors))
     return seg
