@@ -24,6 +24,12 @@ from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.segment.read import SegmentedRun
 from lfdfuse.segment.track import LandmarkTrack
 
+#: a correction's opening has the shape of the way ahead at its onset or this many steps before
+#: (:attr:`DecisionParams.shape_steps`): the person, taking over a moment before the place the
+#: robot missed, steers for the opening at once and cuts into it, seeing its far wall at the
+#: onset, where the robot driving on along the corridor sees the way go on
+CORRECTION_SHAPE_STEPS = 25
+
 
 @dataclass(frozen=True)
 class FurtherDemo:
@@ -108,13 +114,14 @@ def decisions_of(
     run = demo.run
     mapped = replace(run, segment_of=np.asarray(step_of, dtype=np.int64)[run.segment_of])
     fused = fused_vectors(paper, mapped, np.arange(len(run.t_ns)))
+    shape = max(params.shape_steps, CORRECTION_SHAPE_STEPS) if demo.correction else params.shape_steps
     return find_decisions(
         segments=run.segments if segments is None else segments,
         demo=run.demo,
         informative=run.informative,
         fused=fused,
         track=demo.track,
-        params=replace(params, first_onset=True),
+        params=replace(params, first_onset=True, shape_steps=shape),
     )
 
 
