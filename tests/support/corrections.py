@@ -61,6 +61,14 @@ STOP_M = 0.3  # the teacher's place at a goal is driven to within this ...
 #: goal at the first tick its camera could, at the edge of the camera's reach
 INTO_GOAL_M = 0.3
 SPEED_MPS = 0.4
+#: a person whose robot has not moved this far (m) in :data:`STUCK_S` while they drove it (pursuit
+#: cut a corner into a wall) backs off for :data:`BACK_S` and follows the path tighter
+#: (:data:`TIGHT_M` ahead) for :data:`TIGHT_S`
+STUCK_M = 0.05
+STUCK_S = 2.0
+BACK_S = 1.0
+TIGHT_M = 0.3
+TIGHT_S = 4.0
 #: a person who corrected a run watches it on and takes over again where the network leaves the
 #: teacher's path again: at most this many takeovers in one correction
 TAKEOVERS = 2
@@ -227,10 +235,13 @@ class PathPerson:
         self._at = 0
         self.done = False
         self.handed_back_s: float | None = None  # when the last plan was handed back
+        self._been: list[tuple[float, float, float]] = []  # (t, x, y) while driving this plan
+        self._back_until = self._tight_until = -math.inf
 
     def poll(self, t_s: float) -> list[Input]:
         if self.done and self.then:
             self.plan, self.then, self._at, self.done = self.then[0], self.then[1:], 0, False
+            self._been = []
         if self.done or t_s < self.plan.take_s - 1e-9 or self.session is None:
             return []
         snap = self.session.snapshot
@@ -249,8 +260,16 @@ class PathPerson:
         if stop is not None and d[stop] < STOP_M:
             self.plan = replace(self.plan, stops=tuple(g for g in self.plan.stops if g != stop))
             stop = None
+        self._been.append((t_s, pose.x, pose.y))
+        then = next((b for b in reversed(self._been) if b[0] <= t_s - STUCK_S + 1e-9), None)
+        if then is not None and math.hypot(pose.x - then[1], pose.y - then[2]) < STUCK_M:
+            self._been = []
+            self._back_until, self._tight_until = t_s + BACK_S, t_s + BACK_S + TIGHT_S
+        if t_s < self._back_until:
+            return [Input("message", twist_payload(-0.5 * SPEED_MPS, 0.0), SOURCE, TWIST_SCHEMA)]
+        look = TIGHT_M if t_s < self._tight_until else LOOKAHEAD_M
         ahead = near
-        while ahead < len(path) - 1 and d[ahead] < LOOKAHEAD_M and ahead != stop:
+        while ahead < len(path) - 1 and d[ahead] < look and ahead != stop:
             ahead += 1
         gx, gy = path[ahead]
         err = math.atan2(gy - pose.y, gx - pose.x) - pose.theta

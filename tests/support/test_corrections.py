@@ -2,9 +2,22 @@
 
 from __future__ import annotations
 
+import json
+from collections.abc import Callable
+
 import numpy as np
 
-from tests.support.corrections import INTO_GOAL_M, LEAVE_M, STALL_S, CorrectionPlan, correction_plan
+from lfdfuse.robot.pose import Pose
+from tests.support.corrections import (
+    BACK_S,
+    INTO_GOAL_M,
+    LEAVE_M,
+    STALL_S,
+    STUCK_S,
+    CorrectionPlan,
+    PathPerson,
+    correction_plan,
+)
 
 DT_S = 0.1
 STEP_M = 0.04  # 0.4 m/s
@@ -177,3 +190,37 @@ def test_a_robot_that_meets_the_way_out_of_a_spur_on_its_way_in_is_not_corrected
     robot = np.concatenate([_line((0.0, 0.0), (8.4, 0.0)), _line((8.4, 0.0), (8.4, 4.0)), *down])
     reached = len(robot) - sum(len(a) for a in down)
     assert correction_plan(teacher, robot, DT_S, goals_at=[goal_at], reached_at=[reached]) is None
+
+
+class _Snapshot:
+    def __init__(self, pose: Pose) -> None:
+        self.pose = pose
+
+
+class _Session:
+    snapshot: _Snapshot
+
+
+def _drive(person: PathPerson, poses: Callable[[float], Pose], until_s: float) -> list[float]:
+    """The speeds ``person`` commands each 0.1 s to ``until_s`` with the robot at ``poses(t)``."""
+    session = _Session()
+    person.session = session  # type: ignore[assignment]
+    speeds = []
+    for k in range(round(until_s / DT_S)):
+        t = k * DT_S
+        session.snapshot = _Snapshot(poses(t))
+        got = person.poll(t)
+        if got and got[0].kind == "message":
+            speeds.append(float(json.loads(got[0].text)["linear"]["x"]))
+    return speeds
+
+
+def test_a_person_whose_robot_does_not_move_backs_off_and_drives_on() -> None:
+    plan = CorrectionPlan(0.0, TEACHER)
+    pinned = _drive(PathPerson(plan), lambda t: Pose(0.0, 0.0, 0.0), 6.0)
+    stuck = round(STUCK_S / DT_S)  # a pose STUCK_S old is there to compare with from then on
+    assert all(v > 0 for v in pinned[:stuck])
+    assert all(v < 0 for v in pinned[stuck : stuck + round(BACK_S / DT_S)])
+    assert pinned[stuck + round(BACK_S / DT_S)] > 0
+    moving = _drive(PathPerson(plan), lambda t: Pose(0.3 * t, 0.0, 0.0), 6.0)
+    assert all(v > 0 for v in moving)
