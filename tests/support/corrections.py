@@ -150,6 +150,10 @@ def correction_plan(
         k, t = back
         last_i, last_t = pts[k], t
         k += 1
+    if missed is None and reached_at is not None and len(reached) < len(goals_at):
+        # it met the whole path, and passed a goal at its end by without its camera reaching it
+        missed = goals_at[len(reached)]
+        last_i, last_t = max(((a, b) for a, b in met if a <= missed), default=(pts[0], 0))
     if missed is None:
         return None
     take = max(last_t - round(LEAD_S / dt_s), 1)

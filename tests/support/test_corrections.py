@@ -224,3 +224,15 @@ def test_a_person_whose_robot_does_not_move_backs_off_and_drives_on() -> None:
     assert pinned[stuck + round(BACK_S / DT_S)] > 0
     moving = _drive(PathPerson(plan), lambda t: Pose(0.3 * t, 0.0, 0.0), 6.0)
     assert all(v > 0 for v in moving)
+
+
+def test_a_robot_that_met_the_whole_path_but_passed_its_last_goal_by_is_brought_to_it() -> None:
+    # the teacher's path ends where it reached its last goal; the robot drives it half a metre
+    # to the side (meeting every point of it) and its camera never reaches the goal
+    goal_at = len(TEACHER) - 1
+    robot = np.concatenate([TEACHER + [0.0, 0.5], _line((20.0, 0.5), (26.0, 0.5))])
+    assert correction_plan(TEACHER, robot, DT_S, goals_at=[goal_at], reached_at=[goal_at]) is None
+    plan = correction_plan(TEACHER, robot, DT_S, goals_at=[goal_at], reached_at=[])
+    assert plan is not None and len(plan.stops) == 1
+    assert plan.take_s < goal_at * DT_S
+    assert _drives_into(plan, TEACHER[goal_at])
