@@ -24,11 +24,13 @@ from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.segment.read import SegmentedRun
 from lfdfuse.segment.track import LandmarkTrack
 
-#: a correction's opening has the shape of the way ahead at its onset or this many steps before
-#: (:attr:`DecisionParams.shape_steps`): the person, taking over a moment before the place the
-#: robot missed, steers for the opening at once and cuts into it, seeing its far wall at the
-#: onset, where the robot driving on along the corridor sees the way go on
-CORRECTION_SHAPE_STEPS = 25
+#: a correction's opening has the shape of the way ahead at its onset or this many steps (half a
+#: second) before (:attr:`DecisionParams.shape_steps`): the person, taking over a moment before
+#: the place the robot missed, steers for the opening at once and cuts across its mouth, seeing
+#: its far wall at the onset, where the robot driving on along the corridor sees the way go on.
+#: Longer (25 steps) also read corners the person cut as side openings (a decision added where a
+#: correction on world 1700 needed none)
+CORRECTION_SHAPE_STEPS = 5
 
 
 @dataclass(frozen=True)
