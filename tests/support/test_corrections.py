@@ -236,3 +236,27 @@ def test_a_robot_that_met_the_whole_path_but_passed_its_last_goal_by_is_brought_
     assert plan is not None and len(plan.stops) == 1
     assert plan.take_s < goal_at * DT_S
     assert _drives_into(plan, TEACHER[goal_at])
+
+
+def test_a_person_who_watches_on_takes_over_again_at_the_next_plan() -> None:
+    first = CorrectionPlan(0.0, TEACHER[:50])  # 2 m, driven at SPEED_MPS
+    again = CorrectionPlan(12.0, TEACHER[200:260])
+    person = PathPerson(first, [again])
+    session = _Session()
+    person.session = session  # type: ignore[assignment]
+    kinds: list[tuple[float, str]] = []
+    x = 0.0
+    for k in range(round(20.0 / DT_S)):
+        t = k * DT_S
+        session.snapshot = _Snapshot(Pose(x, 0.0, 0.0))
+        got = person.poll(t)
+        kinds += [(t, g.kind) for g in got]
+        if got and got[0].kind == "message":  # the robot drives as told
+            x += float(json.loads(got[0].text)["linear"]["x"]) * DT_S
+        elif t >= 5.0 and x < 8.0:
+            x = 8.0  # the network drove on to the second place
+    backs = [t for t, kind in kinds if kind == "handback"]
+    assert len(backs) == 2 and backs[0] < again.take_s <= backs[1]
+    # nothing between the first hand-back and the second takeover
+    assert not [t for t, _ in kinds if backs[0] < t < again.take_s - 1e-9]
+    assert person.handed_back_s == backs[1]
