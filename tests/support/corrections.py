@@ -11,7 +11,10 @@ a robot that met the path past a goal before it reached it (only coming round ag
 there. :func:`record_correction` then runs ``teleop --table`` from the same start and seed —
 tick for tick the failed run until the person takes over — and a :class:`PathPerson` takes over a little before that point, drives the teacher's path (pure
 pursuit, as a Twist client would) through the place the robot missed and some metres past it,
-and hands back; the network drives on. The log is segmented with the table's behaviours.
+and hands back; the network drives on. A robot the person drives into a wall (pursuit cutting a
+corner) is backed off and the path followed tighter. The person watches on: where the network,
+handed back, leaves the teacher's path again, they take over there too (:data:`TAKEOVERS`).
+The log is segmented with the table's behaviours.
 """
 
 from __future__ import annotations
