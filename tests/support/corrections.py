@@ -74,7 +74,7 @@ TIGHT_M = 0.3
 TIGHT_S = 4.0
 #: a person who corrected a run watches it on and takes over again where the network leaves the
 #: teacher's path again: at most this many takeovers in one correction
-TAKEOVERS = 2
+TAKEOVERS = 3
 
 
 @dataclass(frozen=True)
@@ -337,9 +337,10 @@ def record_correction(
         if driver.done or len(plans) >= takeovers or person.handed_back_s is None:
             break
         again = _plan_of(out, teacher_xy, goals_at)
-        if again is None or again.take_s <= person.handed_back_s:
-            break  # the network drove on along the path, or left it only where the person drove
-        plans.append(again)
+        if again is None or again.take_s <= plans[-1].take_s:
+            break  # the network drove on along the path, or left it before the person drove
+        # a network that leaves the path right after the hand-back is taken over again at once
+        plans.append(replace(again, take_s=max(again.take_s, person.handed_back_s + opts.robot.dt_s)))
     seg = out.with_suffix(".seg.mcap")
     segment_file(out, out=seg, behaviors=",".join(table.behaviors))
     return seg
