@@ -37,7 +37,13 @@ from lfdfuse.progress import Progress, part, tell
 from lfdfuse.robot.pose import Pose
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
 from lfdfuse.segment.pipeline import segment_file
-from lfdfuse.segment.read import SegmentedRun, network_steps, read_segmented, read_segmented_and_run
+from lfdfuse.segment.read import (
+    SegmentedRun,
+    network_steps,
+    person_ticks,
+    read_segmented,
+    read_segmented_and_run,
+)
 from lfdfuse.segment.track import LandmarkTrack
 from lfdfuse.sources.simulate import SimulateOptions, simulate
 from lfdfuse.sources.tasks import Leg
@@ -234,6 +240,7 @@ def _learn_subgoals_pooled(
             track_of(w, r, source=str(src)),
             CORRECTION_KEY in r.metadata,
             network_steps(src, r.t_ns) if CORRECTION_KEY in r.metadata else None,
+            person_ticks(src, r.t_ns) if CORRECTION_KEY in r.metadata else None,
         )
         for name, src, (r, w) in zip(names[1:], demos[1:], read[1:], strict=True)
     ]

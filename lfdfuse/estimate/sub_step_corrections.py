@@ -12,7 +12,7 @@ again while lingering at it. The pooling itself: :mod:`lfdfuse.estimate.pooled_s
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -23,6 +23,14 @@ from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, find_decisi
 from lfdfuse.segment.goals import GoalSegment
 from lfdfuse.segment.read import SegmentedRun
 from lfdfuse.segment.track import LandmarkTrack
+
+#: a correction's opening has the shape of the way ahead at its onset or this many steps (half a
+#: second) before (:attr:`DecisionParams.shape_steps`): the person, taking over a moment before
+#: the place the robot missed, steers for the opening at once and cuts across its mouth, seeing
+#: its far wall at the onset, where the robot driving on along the corridor sees the way go on.
+#: Longer (25 steps) also read corners the person cut as side openings (a decision added where a
+#: correction on world 1700 needed none)
+CORRECTION_SHAPE_STEPS = 5
 
 
 @dataclass(frozen=True)
@@ -37,19 +45,29 @@ class FurtherDemo:
     #: a correction: the network's active step at each of its ticks (``/lfd/step``, nested names
     #: joined by ``/``), where the log kept it; None: not known
     steps: tuple[str | None, ...] | None = None
+    #: a correction: whether the person drove at each of its ticks (``/lfd/authority``), where the
+    #: log kept it; None: not known (then the person took over once, at the first informative tick)
+    person: np.ndarray | None = field(default=None, compare=False)
 
 
 def taken_over(others: Sequence[FurtherDemo]) -> set[str]:
     """The goal steps (top-level names) the corrections' persons took over in: the network's step
-    at each one's first informative tick."""
+    at the first informative tick of each takeover (a person who watched on after handing back
+    may take over again)."""
     out: set[str] = set()
     for o in others:
         if not o.correction or o.steps is None:
             continue
         ticks = np.nonzero(o.run.informative)[0]
-        at = o.steps[int(ticks[0])] if len(ticks) else None
-        if at is not None:
-            out.add(at.split("/", 1)[0])
+        firsts = ticks[:1]
+        if o.person is not None and len(o.person) == len(o.run.informative):
+            began = np.nonzero(o.person & ~np.concatenate([[False], o.person[:-1]]))[0]
+            at_or_after = np.searchsorted(ticks, began)
+            firsts = ticks[at_or_after[at_or_after < len(ticks)]]
+        for i in firsts.tolist():
+            at = o.steps[i]
+            if at is not None:
+                out.add(at.split("/", 1)[0])
     return out
 
 
@@ -98,13 +116,14 @@ def decisions_of(
     run = demo.run
     mapped = replace(run, segment_of=np.asarray(step_of, dtype=np.int64)[run.segment_of])
     fused = fused_vectors(paper, mapped, np.arange(len(run.t_ns)))
+    shape = max(params.shape_steps, CORRECTION_SHAPE_STEPS) if demo.correction else params.shape_steps
     return find_decisions(
         segments=run.segments if segments is None else segments,
         demo=run.demo,
         informative=run.informative,
         fused=fused,
         track=demo.track,
-        params=replace(params, first_onset=True),
+        params=replace(params, first_onset=True, shape_steps=shape),
     )
 
 

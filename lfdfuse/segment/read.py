@@ -260,6 +260,13 @@ def network_ticks(path: str | Path, when_ns: np.ndarray) -> np.ndarray | None:
     return np.asarray(flags[hold(ts, when_ns)])
 
 
+def person_ticks(path: str | Path, when_ns: np.ndarray) -> np.ndarray | None:
+    """Per time of ``when_ns (N,)`` whether a person drove then (:func:`network_ticks` negated),
+    or None when the log does not say."""
+    net = network_ticks(path, when_ns)
+    return None if net is None else ~net
+
+
 #: the network's active step of each tick of a run (DESIGN §5), kept by segment for corrections
 STEP_TOPIC = lfd.NetworkStep.TOPIC
 

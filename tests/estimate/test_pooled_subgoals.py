@@ -9,7 +9,7 @@ from dataclasses import replace
 import numpy as np
 
 from lfdfuse.estimate.pooled_subgoals import Verdict, same_place
-from lfdfuse.estimate.sub_step_corrections import goals_once
+from lfdfuse.estimate.sub_step_corrections import FurtherDemo, goals_once, taken_over
 from lfdfuse.network.changes import step_changes
 from lfdfuse.network.landmark_goals import Landmark
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step
@@ -123,3 +123,32 @@ def test_a_goal_met_again_while_lingering_starts_no_goal_segment_of_a_correction
     ]
     plain = _run((10, red), (30, green), (20, None))
     assert goals_once(plain) is plain
+
+
+def test_every_takeover_of_a_person_who_watched_on_names_the_step_the_network_was_in() -> None:
+    run = _run((10, "attract_red"), (30, "attract_green"), (20, "attract_blue"))
+    steps = ("reach-red",) * 10 + ("reach-green/to-left-opening-1",) * 30 + ("reach-blue",) * 20
+    rng = np.random.default_rng(0)
+    for _ in range(50):  # two stretches the person drove, not every tick of them informative
+        a, b, c, d = sorted(rng.choice(np.arange(61), 4, replace=False).tolist())
+        person = np.zeros(60, bool)
+        person[a:b] = person[c:d] = True
+        fix = replace(run, informative=person & (rng.random(60) > 0.3))
+        ticks = np.nonzero(fix.informative)[0]
+
+        def taken(who: np.ndarray | None, fix: SegmentedRun = fix) -> set[str]:
+            return taken_over([FurtherDemo("fix", fix, None, True, steps, who)])  # type: ignore[arg-type]
+
+        def first_at(t: int, ticks: np.ndarray = ticks) -> set[str]:
+            after = ticks[ticks >= t]
+            return {steps[int(after[0])].split("/")[0]} if len(after) else set()
+
+        # without /lfd/authority: the first informative tick's step; with it, each takeover's
+        assert taken(None) == first_at(0)
+        assert taken(person) == first_at(a) | first_at(c)
+        # one takeover: as without /lfd/authority
+        one = replace(fix, informative=fix.informative & (np.arange(60) < b))
+        mask = person & (np.arange(60) < b)
+        assert taken_over([FurtherDemo("f", one, None, True, steps, mask)]) == taken_over(  # type: ignore[arg-type]
+            [FurtherDemo("f", one, None, True, steps)]  # type: ignore[arg-type]
+        )

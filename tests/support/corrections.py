@@ -11,7 +11,10 @@ a robot that met the path past a goal before it reached it (only coming round ag
 there. :func:`record_correction` then runs ``teleop --table`` from the same start and seed —
 tick for tick the failed run until the person takes over — and a :class:`PathPerson` takes over a little before that point, drives the teacher's path (pure
 pursuit, as a Twist client would) through the place the robot missed and some metres past it,
-and hands back; the network drives on. The log is segmented with the table's behaviours.
+and hands back; the network drives on. A robot the person drives into a wall (pursuit cutting a
+corner) is backed off and the path followed tighter. The person watches on: where the network,
+handed back, leaves the teacher's path again, they take over there too (:data:`TAKEOVERS`).
+The log is segmented with the table's behaviours.
 """
 
 from __future__ import annotations
@@ -61,6 +64,17 @@ STOP_M = 0.3  # the teacher's place at a goal is driven to within this ...
 #: goal at the first tick its camera could, at the edge of the camera's reach
 INTO_GOAL_M = 0.3
 SPEED_MPS = 0.4
+#: a person whose robot has not moved this far (m) in :data:`STUCK_S` while they drove it (pursuit
+#: cut a corner into a wall) backs off for :data:`BACK_S` and follows the path tighter
+#: (:data:`TIGHT_M` ahead) for :data:`TIGHT_S`
+STUCK_M = 0.05
+STUCK_S = 2.0
+BACK_S = 1.0
+TIGHT_M = 0.3
+TIGHT_S = 4.0
+#: a person who corrected a run watches it on and takes over again where the network leaves the
+#: teacher's path again: at most this many takeovers in one correction
+TAKEOVERS = 3
 
 
 @dataclass(frozen=True)
@@ -139,6 +153,10 @@ def correction_plan(
         k, t = back
         last_i, last_t = pts[k], t
         k += 1
+    if missed is None and reached_at is not None and len(reached) < len(goals_at):
+        # it met the whole path, and passed a goal at its end by without its camera reaching it
+        missed = goals_at[len(reached)]
+        last_i, last_t = max(((a, b) for a, b in met if a <= missed), default=(pts[0], 0))
     if missed is None:
         return None
     take = max(last_t - round(LEAD_S / dt_s), 1)
@@ -214,15 +232,23 @@ def _resumed(
 
 class PathPerson:
     """An input source: from ``plan.take_s`` a Twist each period toward the path ``lookahead``
-    ahead (pure pursuit on the session's last pose), a hand-back at the path's end."""
+    ahead (pure pursuit on the session's last pose), a hand-back at the path's end; then the
+    next of ``then`` (a person who watches on and takes over again), if any."""
 
-    def __init__(self, plan: CorrectionPlan) -> None:
+    def __init__(self, plan: CorrectionPlan, then: Sequence[CorrectionPlan] = ()) -> None:
         self.plan = plan
+        self.then = list(then)
         self.session: TeleopSession | None = None
         self._at = 0
         self.done = False
+        self.handed_back_s: float | None = None  # when the last plan was handed back
+        self._been: list[tuple[float, float, float]] = []  # (t, x, y) while driving this plan
+        self._back_until = self._tight_until = -math.inf
 
     def poll(self, t_s: float) -> list[Input]:
+        if self.done and self.then:
+            self.plan, self.then, self._at, self.done = self.then[0], self.then[1:], 0, False
+            self._been = []
         if self.done or t_s < self.plan.take_s - 1e-9 or self.session is None:
             return []
         snap = self.session.snapshot
@@ -235,13 +261,22 @@ class PathPerson:
         self._at = near
         if near >= len(path) - 3:
             self.done = True
+            self.handed_back_s = t_s
             return [Input("handback", "path driven", SOURCE)]
         stop = next((g for g in self.plan.stops if g >= near), None)
         if stop is not None and d[stop] < STOP_M:
             self.plan = replace(self.plan, stops=tuple(g for g in self.plan.stops if g != stop))
             stop = None
+        self._been.append((t_s, pose.x, pose.y))
+        then = next((b for b in reversed(self._been) if b[0] <= t_s - STUCK_S + 1e-9), None)
+        if then is not None and math.hypot(pose.x - then[1], pose.y - then[2]) < STUCK_M:
+            self._been = []
+            self._back_until, self._tight_until = t_s + BACK_S, t_s + BACK_S + TIGHT_S
+        if t_s < self._back_until:
+            return [Input("message", twist_payload(-0.5 * SPEED_MPS, 0.0), SOURCE, TWIST_SCHEMA)]
+        look = TIGHT_M if t_s < self._tight_until else LOOKAHEAD_M
         ahead = near
-        while ahead < len(path) - 1 and d[ahead] < LOOKAHEAD_M and ahead != stop:
+        while ahead < len(path) - 1 and d[ahead] < look and ahead != stop:
             ahead += 1
         gx, gy = path[ahead]
         err = math.atan2(gy - pose.y, gx - pose.x) - pose.theta
@@ -249,6 +284,23 @@ class PathPerson:
         v = SPEED_MPS * max(0.0, math.cos(err)) if abs(err) < math.radians(60) else 0.0
         w = max(-1.0, min(1.0, 2.0 * err))
         return [Input("message", twist_payload(v, w), SOURCE, TWIST_SCHEMA)]
+
+
+def _plan_of(log: Path, teacher_xy: np.ndarray, goals_at: Sequence[int]) -> CorrectionPlan | None:
+    """Where a person takes over the run of ``log`` (:func:`correction_plan`; None: it never left
+    the teacher's path, or the log has no poses)."""
+    run = read_run(log)
+    if run.pose is None:
+        return None
+    dt_s = float(np.median(np.diff(run.t_ns))) / 1e9
+    achieved = [
+        len(lfd.NetworkStep.decode(data).achieved)
+        for *_, data in iter_messages(log, topics=[lfd.NetworkStep.TOPIC])
+    ]
+    reached_at = [
+        next(i for i, n in enumerate(achieved) if n >= k) for k in range(1, max(achieved, default=0) + 1)
+    ]
+    return correction_plan(teacher_xy, np.asarray(run.pose[:, :2]), dt_s, goals_at, reached_at)
 
 
 def record_correction(
@@ -262,32 +314,33 @@ def record_correction(
     max_time_s: float,
     out: Path,
     goals_at: Sequence[int] = (),
+    takeovers: int = TAKEOVERS,
 ) -> Path | None:
     """Correct ``table``'s failed run (its log ``failed_log``, from ``start`` with ``seed``) with a
     :class:`PathPerson`; returns the segmented correction log, or None when the run never left
-    the teacher's path (nothing to correct there)."""
-    run = read_run(failed_log)
-    if run.pose is None:
-        return None
-    dt_s = float(np.median(np.diff(run.t_ns))) / 1e9
-    achieved = [
-        len(lfd.NetworkStep.decode(data).achieved)
-        for *_, data in iter_messages(failed_log, topics=[lfd.NetworkStep.TOPIC])
-    ]
-    reached_at = [
-        next(i for i, n in enumerate(achieved) if n >= k) for k in range(1, max(achieved, default=0) + 1)
-    ]
-    plan = correction_plan(teacher_xy, np.asarray(run.pose[:, :2]), dt_s, goals_at, reached_at)
+    the teacher's path (nothing to correct there). The person watches on after handing back:
+    where the network leaves the teacher's path again, they take over there too (the run
+    recorded again, tick for tick the same until then), up to ``takeovers`` times in all."""
+    plan = _plan_of(failed_log, teacher_xy, goals_at)
     if plan is None:
         return None
-    opts = TeleopOptions(
-        world=world, input_name="script:path-person", seed=seed, start=start, duration_s=max_time_s
-    )
-    person = PathPerson(plan)
-    driver = correction_driver(opts, table)
-    session = make_session(opts, inputs=[person], clock=SimClock(), network=driver)
-    person.session = session
-    correct(opts, session=session, driver=driver, table_name="table.yaml", out=out)
+    plans = [plan]
+    while True:
+        opts = TeleopOptions(
+            world=world, input_name="script:path-person", seed=seed, start=start, duration_s=max_time_s
+        )
+        person = PathPerson(plans[0], plans[1:])
+        driver = correction_driver(opts, table)
+        session = make_session(opts, inputs=[person], clock=SimClock(), network=driver)
+        person.session = session
+        correct(opts, session=session, driver=driver, table_name="table.yaml", out=out)
+        if driver.done or len(plans) >= takeovers or person.handed_back_s is None:
+            break
+        again = _plan_of(out, teacher_xy, goals_at)
+        if again is None or again.take_s <= plans[-1].take_s:
+            break  # the network drove on along the path, or left it before the person drove
+        # a network that leaves the path right after the hand-back is taken over again at once
+        plans.append(replace(again, take_s=max(again.take_s, person.handed_back_s + opts.robot.dt_s)))
     seg = out.with_suffix(".seg.mcap")
     segment_file(out, out=seg, behaviors=",".join(table.behaviors))
     return seg

@@ -2,9 +2,22 @@
 
 from __future__ import annotations
 
+import json
+from collections.abc import Callable
+
 import numpy as np
 
-from tests.support.corrections import INTO_GOAL_M, LEAVE_M, STALL_S, CorrectionPlan, correction_plan
+from lfdfuse.robot.pose import Pose
+from tests.support.corrections import (
+    BACK_S,
+    INTO_GOAL_M,
+    LEAVE_M,
+    STALL_S,
+    STUCK_S,
+    CorrectionPlan,
+    PathPerson,
+    correction_plan,
+)
 
 DT_S = 0.1
 STEP_M = 0.04  # 0.4 m/s
@@ -177,3 +190,73 @@ def test_a_robot_that_meets_the_way_out_of_a_spur_on_its_way_in_is_not_corrected
     robot = np.concatenate([_line((0.0, 0.0), (8.4, 0.0)), _line((8.4, 0.0), (8.4, 4.0)), *down])
     reached = len(robot) - sum(len(a) for a in down)
     assert correction_plan(teacher, robot, DT_S, goals_at=[goal_at], reached_at=[reached]) is None
+
+
+class _Snapshot:
+    def __init__(self, pose: Pose) -> None:
+        self.pose = pose
+
+
+class _Session:
+    snapshot: _Snapshot
+
+
+def _drive(person: PathPerson, poses: Callable[[float], Pose], until_s: float) -> list[float]:
+    """The speeds ``person`` commands each 0.1 s to ``until_s`` with the robot at ``poses(t)``."""
+    session = _Session()
+    person.session = session  # type: ignore[assignment]
+    speeds = []
+    for k in range(round(until_s / DT_S)):
+        t = k * DT_S
+        session.snapshot = _Snapshot(poses(t))
+        got = person.poll(t)
+        if got and got[0].kind == "message":
+            speeds.append(float(json.loads(got[0].text)["linear"]["x"]))
+    return speeds
+
+
+def test_a_person_whose_robot_does_not_move_backs_off_and_drives_on() -> None:
+    plan = CorrectionPlan(0.0, TEACHER)
+    pinned = _drive(PathPerson(plan), lambda t: Pose(0.0, 0.0, 0.0), 6.0)
+    stuck = round(STUCK_S / DT_S)  # a pose STUCK_S old is there to compare with from then on
+    assert all(v > 0 for v in pinned[:stuck])
+    assert all(v < 0 for v in pinned[stuck : stuck + round(BACK_S / DT_S)])
+    assert pinned[stuck + round(BACK_S / DT_S)] > 0
+    moving = _drive(PathPerson(plan), lambda t: Pose(0.3 * t, 0.0, 0.0), 6.0)
+    assert all(v > 0 for v in moving)
+
+
+def test_a_robot_that_met_the_whole_path_but_passed_its_last_goal_by_is_brought_to_it() -> None:
+    # the teacher's path ends where it reached its last goal; the robot drives it half a metre
+    # to the side (meeting every point of it) and its camera never reaches the goal
+    goal_at = len(TEACHER) - 1
+    robot = np.concatenate([TEACHER + [0.0, 0.5], _line((20.0, 0.5), (26.0, 0.5))])
+    assert correction_plan(TEACHER, robot, DT_S, goals_at=[goal_at], reached_at=[goal_at]) is None
+    plan = correction_plan(TEACHER, robot, DT_S, goals_at=[goal_at], reached_at=[])
+    assert plan is not None and len(plan.stops) == 1
+    assert plan.take_s < goal_at * DT_S
+    assert _drives_into(plan, TEACHER[goal_at])
+
+
+def test_a_person_who_watches_on_takes_over_again_at_the_next_plan() -> None:
+    first = CorrectionPlan(0.0, TEACHER[:50])  # 2 m, driven at SPEED_MPS
+    again = CorrectionPlan(12.0, TEACHER[200:260])
+    person = PathPerson(first, [again])
+    session = _Session()
+    person.session = session  # type: ignore[assignment]
+    kinds: list[tuple[float, str]] = []
+    x = 0.0
+    for k in range(round(20.0 / DT_S)):
+        t = k * DT_S
+        session.snapshot = _Snapshot(Pose(x, 0.0, 0.0))
+        got = person.poll(t)
+        kinds += [(t, g.kind) for g in got]
+        if got and got[0].kind == "message":  # the robot drives as told
+            x += float(json.loads(got[0].text)["linear"]["x"]) * DT_S
+        elif t >= 5.0 and x < 8.0:
+            x = 8.0  # the network drove on to the second place
+    backs = [t for t, kind in kinds if kind == "handback"]
+    assert len(backs) == 2 and backs[0] < again.take_s <= backs[1]
+    # nothing between the first hand-back and the second takeover
+    assert not [t for t, _ in kinds if backs[0] < t < again.take_s - 1e-9]
+    assert person.handed_back_s == backs[1]
