@@ -11,6 +11,10 @@ person's correction (a ``teleop --table`` log: only the person's ticks are infor
   sub-steps' rows pool over both demos. A decision one teacher took and another teacher passed
   by while reaching the goal some other way was no choice the task needs: *dropped* (the goal
   step loses its sub-goals, the paper's step again).
+* **A correction's goals are its network's**: a target its robot met while the network was after
+  another goal (passed on the way, before the person took over or after the hand-back, or come
+  round to again) starts no goal segment (:func:`~lfdfuse.estimate.sub_step_corrections.goals_of_network`),
+  so the person's ticks go to the goal step the network was in.
 * **A correction ends in a decision**: where the person took over and turned into an opening the
   network passed by, the turn is a decision of the goal step the network was in, with its
   landmark from the correction's own ticks and sensors — *added* to that step (a step whose
@@ -30,7 +34,7 @@ person's correction (a ``teleop --table`` log: only the person's ticks are infor
 from __future__ import annotations
 
 import math
-from collections.abc import Collection, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -44,6 +48,7 @@ from lfdfuse.estimate.sub_step_corrections import (
     FurtherDemo,
     Inserted,
     decisions_of,
+    goals_of_network,
     goals_once,
     inside_decision,
     labelled_parts,
@@ -125,7 +130,12 @@ def pool_subgoals(
     """``table`` (the first demo's with sub-goals, ``decisions`` its decision points; ``paper``
     the first demo's table without) with the further demos' decisions matched, added or dropped
     and the rows they drive in pooled (see the module docstring)."""
-    others = [replace(o, run=goals_once(o.run)) if o.correction else o for o in others]
+    goals = {
+        st.name: seg.goal
+        for st, seg in zip(table.network.steps, first.segments, strict=False)
+        if seg.goal is not None
+    }
+    others = [replace(o, run=_goals_met(o, goals)) if o.correction else o for o in others]
     runs = [first, *(o.run for o in others)]
     al = align(runs)
     n = len(first.segments)
@@ -260,6 +270,14 @@ def pool_subgoals(
     )
     kept = tuple(s.decision for j in goal_steps for s in out_slots[j] if s.source == 0)
     return PooledSubgoals(built, tuple(verdicts), kept)
+
+
+def _goals_met(demo: FurtherDemo, goals: Mapping[str, str]) -> SegmentedRun:
+    """A correction's run segmented by the goals its network met (``goals``: each goal step's
+    goal by name), or, where the log kept no network steps, by each goal met once."""
+    if demo.steps is None:
+        return goals_once(demo.run)
+    return goals_of_network(demo.run, demo.steps, goals)
 
 
 def _build(
