@@ -8,7 +8,8 @@ stretch of the path since (into a dead end the teacher passed by, round the wron
 followed. Where the teacher reached a goal the robot reached too, the points within
 :data:`GOAL_M` of it need not be met (the robot reaches a goal from where its camera sees it);
 a robot that met the path past a goal before it reached it (only coming round again) missed it
-there. :func:`record_correction` then runs ``teleop --table`` from the same start and seed —
+there, and so did a robot that met the path all the way but never reached a goal on it (drove
+past it out of the camera's reach). :func:`record_correction` then runs ``teleop --table`` from the same start and seed —
 tick for tick the failed run until the person takes over — and a :class:`PathPerson` takes over a little before that point, drives the teacher's path (pure
 pursuit, as a Twist client would) through the place the robot missed and some metres past it,
 and hands back; the network drives on. The log is segmented with the table's behaviours.
@@ -139,6 +140,11 @@ def correction_plan(
         k, t = back
         last_i, last_t = pts[k], t
         k += 1
+    if missed is None and reached_at is not None and len(reached) < len(goals_at):
+        # it met the teacher's path all the way but never reached this goal: it drove past it out
+        # of the camera's reach (the path ends there, no point past it to meet late)
+        missed = goals_at[len(reached)]
+        last_i, last_t = max(((a, b) for a, b in met if a <= missed), default=(pts[0], 0))
     if missed is None:
         return None
     take = max(last_t - round(LEAD_S / dt_s), 1)

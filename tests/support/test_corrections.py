@@ -177,3 +177,17 @@ def test_a_robot_that_meets_the_way_out_of_a_spur_on_its_way_in_is_not_corrected
     robot = np.concatenate([_line((0.0, 0.0), (8.4, 0.0)), _line((8.4, 0.0), (8.4, 4.0)), *down])
     reached = len(robot) - sum(len(a) for a in down)
     assert correction_plan(teacher, robot, DT_S, goals_at=[goal_at], reached_at=[reached]) is None
+
+
+def test_a_robot_that_drove_past_the_last_goal_at_the_paths_end_is_brought_to_it() -> None:
+    # the teacher's path ends at the last goal; the robot drives along it a metre aside (within
+    # the path's reach, out of the camera's) and on past it, never reaching it: the person takes
+    # over before the goal and drives to where the teacher reached it
+    goal_at = len(TEACHER) - 1
+    robot = np.concatenate([_line((0.0, 0.8), (30.0, 0.8)), np.full((300, 2), [30.0, 0.8])])
+    assert correction_plan(TEACHER, robot, DT_S) is None  # it met every point of the path
+    assert correction_plan(TEACHER, robot, DT_S, goals_at=[goal_at], reached_at=[goal_at]) is None
+    plan = correction_plan(TEACHER, robot, DT_S, goals_at=[goal_at], reached_at=[])
+    assert plan is not None and len(plan.stops) == 1
+    assert robot[round(plan.take_s / DT_S), 0] < TEACHER[goal_at, 0]
+    assert _drives_into(plan, TEACHER[goal_at])
