@@ -304,12 +304,13 @@ def _build(
         run if m.decisions is None else replace(run, informative=run.informative & m.decisions)
         for run, m in zip(runs, models, strict=True)
     ]
+    corrections = {e for e, o in enumerate(others, start=1) if o.correction}
     count = 0
 
     def leaf(base: Step, parts: Sequence[tuple[int, np.ndarray]]) -> Step:
         nonlocal count
         count += 1
-        return _pooled_leaf(count - 1, base, parts, views, models, opts)
+        return _pooled_leaf(count - 1, base, parts, views, models, opts, corrections)
 
     built: list[Step] = []
     for j, old in enumerate(table.network.steps):
@@ -413,9 +414,14 @@ def _pooled_leaf(
     views: Sequence[SegmentedRun],
     models: Sequence[Commands],
     opts: EstimateOptions,
+    corrections: Collection[int] = (),
 ) -> Step:
     """``base`` with every row a further demo (any but the first) adds steps to estimated again
-    on the pooled steps of ``parts``; its other rows as they are."""
+    on the pooled steps of ``parts``; its other rows as they are. A row the first demo pins
+    (``opts.min_samples`` steps or more) that only ``corrections`` add to, fewer steps than that
+    in all, stays as it is: a person's few ticks in a row are one manoeuvre somewhere the row
+    drives (the mouth of a dead end, a drive on past a goal), and the row drives everywhere
+    its BAC comes up in the step, where the demo's many steps showed how."""
     behaviors = views[0].names
     by_bac: dict[int, list[tuple[int, np.ndarray]]] = {}
     for e, ticks in parts:
@@ -430,12 +436,18 @@ def _pooled_leaf(
         added = sum(len(t) for e, t in bparts if e != 0)
         if not added:
             continue
+        before = rows.get(b)
+        if (
+            before is not None
+            and added < opts.min_samples <= (before.samples or 0)
+            and all(e in corrections for e, t in bparts if e != 0 and len(t))
+        ):
+            continue
         app = tuple(i for i in range(len(behaviors)) if b >> i & 1)
         p = problem_of(bparts, views, app, models, bins)
         est = estimate_groups([p], opts=opts, rng=row_rng(opts.seed, SUBSTEP, leaf_no, b), bins=bins)[0]
         err = float(np.degrees(angle_errors(p.vectors, p.demo, est.weights).mean()))
         app_names = [behaviors[i] for i in app]
-        before = rows.get(b)
         total = sum(len(t) for _, t in bparts)
         changed = True
         rows[b] = FusionRow(
