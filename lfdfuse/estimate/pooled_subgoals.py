@@ -28,7 +28,9 @@ person's correction (a ``teleop --table`` log: only the person's ticks are infor
 * **Rows**: every leaf step keeps its rows; a row another demo adds informative steps to is
   estimated again on the pooled steps (the product over the demos, as
   :mod:`lfdfuse.estimate.pooled_estimate` does) on its own random stream, so a row nobody
-  corrected is bit-identical. A new turn step's rows are the person's turn alone.
+  corrected is bit-identical. A new turn step's rows are the person's turn alone. A row the
+  first demo pins that corrections add only a few ticks to (fewer than a row needs) stays as it
+  is: one manoeuvre somewhere the row drives is no lesson for everywhere it drives.
 """
 
 from __future__ import annotations
