@@ -11,6 +11,10 @@ person's correction (a ``teleop --table`` log: only the person's ticks are infor
   sub-steps' rows pool over both demos. A decision one teacher took and another teacher passed
   by while reaching the goal some other way was no choice the task needs: *dropped* (the goal
   step loses its sub-goals, the paper's step again).
+* **A correction's goals are its network's**: a target its robot met while the network was after
+  another goal (passed on the way, before the person took over or after the hand-back, or come
+  round to again) starts no goal segment (:func:`~lfdfuse.estimate.sub_step_corrections.goals_of_network`),
+  so the person's ticks go to the goal step the network was in.
 * **A correction ends in a decision**: where the person took over and turned into an opening the
   network passed by, the turn is a decision of the goal step the network was in, with its
   landmark from the correction's own ticks and sensors — *added* to that step (a step whose
@@ -24,13 +28,15 @@ person's correction (a ``teleop --table`` log: only the person's ticks are infor
 * **Rows**: every leaf step keeps its rows; a row another demo adds informative steps to is
   estimated again on the pooled steps (the product over the demos, as
   :mod:`lfdfuse.estimate.pooled_estimate` does) on its own random stream, so a row nobody
-  corrected is bit-identical. A new turn step's rows are the person's turn alone.
+  corrected is bit-identical. A new turn step's rows are the person's turn alone. A row the
+  first demo pins that corrections add only a few ticks to (fewer than a row needs) stays as it
+  is: one manoeuvre somewhere the row drives is no lesson for everywhere it drives.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Collection, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -44,6 +50,7 @@ from lfdfuse.estimate.sub_step_corrections import (
     FurtherDemo,
     Inserted,
     decisions_of,
+    goals_of_network,
     goals_once,
     inside_decision,
     labelled_parts,
@@ -125,7 +132,12 @@ def pool_subgoals(
     """``table`` (the first demo's with sub-goals, ``decisions`` its decision points; ``paper``
     the first demo's table without) with the further demos' decisions matched, added or dropped
     and the rows they drive in pooled (see the module docstring)."""
-    others = [replace(o, run=goals_once(o.run)) if o.correction else o for o in others]
+    goals = {
+        st.name: seg.goal
+        for st, seg in zip(table.network.steps, first.segments, strict=False)
+        if seg.goal is not None
+    }
+    others = [replace(o, run=_goals_met(o, goals)) if o.correction else o for o in others]
     runs = [first, *(o.run for o in others)]
     al = align(runs)
     n = len(first.segments)
@@ -262,6 +274,14 @@ def pool_subgoals(
     return PooledSubgoals(built, tuple(verdicts), kept)
 
 
+def _goals_met(demo: FurtherDemo, goals: Mapping[str, str]) -> SegmentedRun:
+    """A correction's run segmented by the goals its network met (``goals``: each goal step's
+    goal by name), or, where the log kept no network steps, by each goal met once."""
+    if demo.steps is None:
+        return goals_once(demo.run)
+    return goals_of_network(demo.run, demo.steps, goals)
+
+
 def _build(
     first: SegmentedRun,
     paper: FusionTable,
@@ -286,12 +306,13 @@ def _build(
         run if m.decisions is None else replace(run, informative=run.informative & m.decisions)
         for run, m in zip(runs, models, strict=True)
     ]
+    corrections = {e for e, o in enumerate(others, start=1) if o.correction}
     count = 0
 
     def leaf(base: Step, parts: Sequence[tuple[int, np.ndarray]]) -> Step:
         nonlocal count
         count += 1
-        return _pooled_leaf(count - 1, base, parts, views, models, opts)
+        return _pooled_leaf(count - 1, base, parts, views, models, opts, corrections)
 
     built: list[Step] = []
     for j, old in enumerate(table.network.steps):
@@ -395,9 +416,14 @@ def _pooled_leaf(
     views: Sequence[SegmentedRun],
     models: Sequence[Commands],
     opts: EstimateOptions,
+    corrections: Collection[int] = (),
 ) -> Step:
     """``base`` with every row a further demo (any but the first) adds steps to estimated again
-    on the pooled steps of ``parts``; its other rows as they are."""
+    on the pooled steps of ``parts``; its other rows as they are. A row the first demo pins
+    (``opts.min_samples`` steps or more) that only ``corrections`` add to, fewer steps than that
+    in all, stays as it is: a person's few ticks in a row are one manoeuvre somewhere the row
+    drives (the mouth of a dead end, a drive on past a goal), and the row drives everywhere
+    its BAC comes up in the step, where the demo's many steps showed how."""
     behaviors = views[0].names
     by_bac: dict[int, list[tuple[int, np.ndarray]]] = {}
     for e, ticks in parts:
@@ -412,12 +438,18 @@ def _pooled_leaf(
         added = sum(len(t) for e, t in bparts if e != 0)
         if not added:
             continue
+        before = rows.get(b)
+        if (
+            before is not None
+            and added < opts.min_samples <= (before.samples or 0)
+            and all(e in corrections for e, t in bparts if e != 0 and len(t))
+        ):
+            continue
         app = tuple(i for i in range(len(behaviors)) if b >> i & 1)
         p = problem_of(bparts, views, app, models, bins)
         est = estimate_groups([p], opts=opts, rng=row_rng(opts.seed, SUBSTEP, leaf_no, b), bins=bins)[0]
         err = float(np.degrees(angle_errors(p.vectors, p.demo, est.weights).mean()))
         app_names = [behaviors[i] for i in app]
-        before = rows.get(b)
         total = sum(len(t) for _, t in bparts)
         changed = True
         rows[b] = FusionRow(

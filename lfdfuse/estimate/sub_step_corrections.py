@@ -5,13 +5,14 @@ A correction log (``teleop --table``) records the network's active step every ti
 ticks then go to the sub-step the network was in (:func:`labelled_parts`), and a turn-off of the
 person's that none of the step's decisions names becomes a decision of that sub-step
 (:func:`inside_decision`), its landmark counted from where the network entered it, inserted
-before it (:func:`unique_steps`). :func:`goals_once` aligns a correction whose robot met a goal
-again while lingering at it. The pooling itself: :mod:`lfdfuse.estimate.pooled_subgoals`.
+before it (:func:`unique_steps`). :func:`goals_of_network` aligns a correction by the goals its network
+met, not every target its robot passed (:func:`goals_once`, for a log that kept no steps: a goal
+met again while lingering at it). The pooling itself: :mod:`lfdfuse.estimate.pooled_subgoals`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -31,6 +32,10 @@ from lfdfuse.segment.track import LandmarkTrack
 #: Longer (25 steps) also read corners the person cut as side openings (a decision added where a
 #: correction on world 1700 needed none)
 CORRECTION_SHAPE_STEPS = 5
+
+#: a goal met at tick ``m`` is the network's when its step within this many ticks before was that
+#: goal's (the network sees the goal met at ``m`` and is on to the next step there)
+NETWORK_GOAL_TICKS = 3
 
 
 @dataclass(frozen=True)
@@ -75,13 +80,42 @@ def goals_once(run: SegmentedRun) -> SegmentedRun:
     """A correction's run with each goal met once: a goal met again right after it was met (the
     robot lingering at it, its network already after the next goal) starts no goal segment; its
     steps belong to the segment after (None: the run ended there)."""
+    last: list[str | None] = [None]  # the last goal met
+
+    def first_time(seg: GoalSegment) -> bool:
+        again, last[0] = seg.goal == last[0], seg.goal
+        return not again
+
+    return _goals_kept(run, first_time)
+
+
+def goals_of_network(
+    run: SegmentedRun, steps: Sequence[str | None], goals: Mapping[str, str]
+) -> SegmentedRun:
+    """A correction's run with only the goals its network met: a target the robot met while its
+    network was after another goal (``steps``: the network's step per tick; ``goals``: each goal
+    step's goal, by top-level name) starts no goal segment; its steps belong to the segment after
+    (None: the run ended there). The network drives before the person takes over and after the
+    hand-back, and may pass a target it is not after, or come round to one it met before."""
+
+    def networks(seg: GoalSegment) -> bool:
+        met = seg.stop - 1  # the network sees its goal met at this tick and is on to the next
+        after = {steps[i] for i in range(max(met - NETWORK_GOAL_TICKS, 0), met + 1)}
+        return any(s is not None and goals.get(s.split("/", 1)[0]) == seg.goal for s in after)
+
+    return _goals_kept(run, networks)
+
+
+def _goals_kept(run: SegmentedRun, keep: Callable[[GoalSegment], bool]) -> SegmentedRun:
+    """``run`` with the goal segments ``keep`` refuses merged into the segment after (None: the
+    run ended there)."""
     segs: list[GoalSegment] = []
-    start, last = 0, None
+    start = 0
     for seg in run.segments:
-        if seg.goal is not None and seg.goal == last:
-            continue  # met again: on into the next segment
+        if seg.goal is not None and not keep(seg):
+            continue  # not a goal of this run: on into the next segment
         segs.append(GoalSegment(len(segs), start, seg.stop, seg.goal))
-        start, last = seg.stop, (seg.goal if seg.goal is not None else last)
+        start = seg.stop
     if start < len(run.t_ns):
         segs.append(GoalSegment(len(segs), start, len(run.t_ns), None))
     if tuple(segs) == run.segments:

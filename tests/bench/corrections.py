@@ -28,6 +28,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+from tests.support.corrections import TAKEOVERS
 from tests.support.taught_again import TaughtAgain, screen, summary, teach_again, teach_again_screened
 
 FIRST_SEED = 1640
@@ -56,7 +57,12 @@ def seeds_of(text: str) -> list[int]:
 
 
 def run_seeds(
-    seeds: Iterable[int], *, keep: Path, out: Path | None, screen_only: bool = False
+    seeds: Iterable[int],
+    *,
+    keep: Path,
+    out: Path | None,
+    screen_only: bool = False,
+    takeovers: int = TAKEOVERS,
 ) -> dict[str, Any]:
     worlds: list[TaughtAgain] = []
     for seed in seeds:
@@ -71,7 +77,7 @@ def run_seeds(
                 "wall_s": {k: round(v, 1) for k, v in s.times.items()},
             }
         else:
-            w = teach_again_screened(s, folder=folder)
+            w = teach_again_screened(s, folder=folder, takeovers=takeovers)
             worlds.append(w)
             row = w.row()
         if out is not None:
@@ -88,10 +94,21 @@ if __name__ == "__main__":
     ap.add_argument("--keep", type=Path, help="keep every world's folder here (and reuse its screening)")
     ap.add_argument("--json", type=Path, help="append a JSON line per world")
     ap.add_argument("--screen-only", action="store_true")
+    ap.add_argument(
+        "--takeovers",
+        type=int,
+        default=TAKEOVERS,
+        help="a person who watches on takes over up to this many times in the one correction (1: once)",
+    )
     a = ap.parse_args()
     if a.seeds is None:
         for r in run(quick=a.quick):
             print(r, flush=True)
     else:
         keep = a.keep or Path(tempfile.mkdtemp(prefix="corrections-"))
-        print(run_seeds(seeds_of(a.seeds), keep=keep, out=a.json, screen_only=a.screen_only), flush=True)
+        print(
+            run_seeds(
+                seeds_of(a.seeds), keep=keep, out=a.json, screen_only=a.screen_only, takeovers=a.takeovers
+            ),
+            flush=True,
+        )

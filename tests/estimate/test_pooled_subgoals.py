@@ -9,7 +9,13 @@ from dataclasses import replace
 import numpy as np
 
 from lfdfuse.estimate.pooled_subgoals import Verdict, same_place
-from lfdfuse.estimate.sub_step_corrections import FurtherDemo, goals_once, taken_over
+from lfdfuse.estimate.sub_step_corrections import (
+    NETWORK_GOAL_TICKS,
+    FurtherDemo,
+    goals_of_network,
+    goals_once,
+    taken_over,
+)
 from lfdfuse.network.changes import step_changes
 from lfdfuse.network.landmark_goals import Landmark
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step
@@ -152,3 +158,40 @@ def test_every_takeover_of_a_person_who_watched_on_names_the_step_the_network_wa
         assert taken_over([FurtherDemo("f", one, None, True, steps, mask)]) == taken_over(  # type: ignore[arg-type]
             [FurtherDemo("f", one, None, True, steps)]  # type: ignore[arg-type]
         )
+
+
+def _steps(*spans: tuple[int, str | None]) -> tuple[str | None, ...]:
+    """The network's step per tick: ``spans`` of (ticks, step name)."""
+    return tuple(name for k, name in spans for _ in range(k))
+
+
+GOALS = {"reach-red": "attract_red", "reach-green": "attract_green", "reach-blue": "attract_blue"}
+
+
+def test_a_target_met_while_the_network_was_after_another_goal_starts_no_goal_segment() -> None:
+    red, green, blue = "attract_red", "attract_green", "attract_blue"
+    # red met (the network on to green there), blue passed on the way to green, red come round to
+    # again; green never reached: the tail is the way to green
+    run = _run((10, red), (30, blue), (40, red), (20, None))
+    steps = _steps((9, "reach-red"), (91, "reach-green/to-left-opening-2"))
+    mine = goals_of_network(run, steps, GOALS)
+    assert [(s.start, s.stop, s.goal) for s in mine.segments] == [(0, 10, red), (10, 100, None)]
+    assert mine.segment_of.tolist() == [0] * 10 + [1] * 90
+    # every target met as the network's goal: the run as it is, whatever the sub-steps
+    plain = _run((10, red), (30, green), (20, blue))
+    steps = _steps((9, "reach-red"), (30, "reach-green/turn-left"), (20, "reach-blue"), (1, None))
+    assert goals_of_network(plain, steps, GOALS) is plain
+    # lingering at green (met again, the network after blue) is dropped as goals_once drops it
+    linger = _run((10, red), (30, green), (5, green), (20, blue))
+    steps = _steps((9, "reach-red"), (30, "reach-green"), (25, "reach-blue"), (1, None))
+    assert goals_of_network(linger, steps, GOALS).segments == goals_once(linger).segments
+
+
+def test_the_network_met_its_goal_within_a_few_ticks_of_the_segmenter_or_not_at_all() -> None:
+    red = "attract_red"
+    run = _run((10, red), (10, None))
+    for late in range(-NETWORK_GOAL_TICKS - 3, 3):
+        # the network left reach-red ``late`` ticks after the segmenter saw red met (tick 9)
+        steps = _steps((10 + late, "reach-red"), (10 - late, "reach-green"))
+        kept = [s.goal for s in goals_of_network(run, steps, GOALS).segments]
+        assert kept == ([red, None] if late >= -NETWORK_GOAL_TICKS else [None])

@@ -241,6 +241,47 @@ def test_a_correction_in_a_sub_step_re_weights_that_sub_step_alone(read: Read, r
             assert q == r or (q.samples_added and q.weights_before == r.weights), (n, r.bac)
 
 
+def test_a_persons_few_ticks_leave_a_row_the_demo_pins_as_it_was(read: Read, refined: LearnResult) -> None:
+    """The demo read as a correction in the goal step's last sub-step, the person driving from
+    several places past the turn on: each row of that sub-step the person added fewer ticks to
+    than a row needs (``min_samples``) while the demo's own row has that many stays bit for bit;
+    every other row the person drove is estimated again on the pooled ticks. Over several
+    stretches, so both kinds of row come up."""
+    from lfdfuse.estimate.pooled_subgoals import pool_subgoals
+    from lfdfuse.estimate.sub_step_corrections import FurtherDemo
+
+    run, track, paper = read.run, read.track, read.paper
+    table = refined.table
+    (d,) = [d for d in refined.decisions if table.network.steps[d.segment].name == "reach-green"]
+    seg = run.segments[d.segment]
+    steps = _labels(run, table, refined.decisions)
+    (old,) = [s for n, s in named_leaf_steps(table) if n == "reach-green/reach-green"]
+    kinds: set[bool] = set()
+    for lo in range(d.turn_end + 30, seg.stop - 20, max((seg.stop - d.turn_end) // 4, 1)):
+        person = np.zeros(len(run.t_ns), dtype=bool)
+        person[lo : seg.stop] = True
+        fix = replace(run, informative=run.informative & person)
+        pooled = pool_subgoals(
+            first=run,
+            first_name="demo",
+            paper=paper,
+            table=table,
+            decisions=refined.decisions,
+            others=[FurtherDemo("fix", fix, track, correction=True, steps=steps)],
+            opts=OPTS,
+        ).table
+        (new,) = [s for n, s in named_leaf_steps(pooled) if n == "reach-green/reach-green"]
+        rows = {r.bac: r for r in new.fusion}
+        added = np.bincount(run.bac[fix.informative], minlength=max(rows) + 1)
+        for r in old.fusion:
+            few = 0 < added[r.bac] < OPTS.min_samples <= (r.samples or 0)
+            if added[r.bac]:
+                kinds.add(few)
+                assert (rows[r.bac] == r) == few, (lo, r.bac, int(added[r.bac]), r.samples)
+                assert few or rows[r.bac].samples_added == added[r.bac]
+    assert kinds == {True, False}
+
+
 def test_a_corrections_turn_off_inside_a_sub_step_becomes_a_decision_of_that_sub_step(
     read: Read, refined: LearnResult
 ) -> None:

@@ -8,12 +8,14 @@ stretch of the path since (into a dead end the teacher passed by, round the wron
 followed. Where the teacher reached a goal the robot reached too, the points within
 :data:`GOAL_M` of it need not be met (the robot reaches a goal from where its camera sees it);
 a robot that met the path past a goal before it reached it (only coming round again) missed it
-there. :func:`record_correction` then runs ``teleop --table`` from the same start and seed —
+there, and so did a robot that met the path all the way but never reached a goal on it (drove
+past it out of the camera's reach). :func:`record_correction` then runs ``teleop --table`` from the same start and seed —
 tick for tick the failed run until the person takes over — and a :class:`PathPerson` takes over a little before that point, drives the teacher's path (pure
 pursuit, as a Twist client would) through the place the robot missed and some metres past it,
 and hands back; the network drives on. A robot the person drives into a wall (pursuit cutting a
-corner) is backed off and the path followed tighter. The person watches on: where the network,
-handed back, leaves the teacher's path again, they take over there too (:data:`TAKEOVERS`).
+corner) is backed off and the path followed tighter. One correction is one takeover; a person
+who watches on (``takeovers`` > 1) takes over again where the network, handed back, leaves the
+teacher's path again.
 The log is segmented with the table's behaviours.
 """
 
@@ -72,9 +74,9 @@ STUCK_S = 2.0
 BACK_S = 1.0
 TIGHT_M = 0.3
 TIGHT_S = 4.0
-#: a person who corrected a run watches it on and takes over again where the network leaves the
-#: teacher's path again: at most this many takeovers in one correction
-TAKEOVERS = 3
+#: a person who corrected a run may watch it on and take over again where the network leaves the
+#: teacher's path again (``record_correction(takeovers=...)``); one correction is one takeover
+TAKEOVERS = 1
 
 
 @dataclass(frozen=True)
@@ -318,9 +320,9 @@ def record_correction(
 ) -> Path | None:
     """Correct ``table``'s failed run (its log ``failed_log``, from ``start`` with ``seed``) with a
     :class:`PathPerson`; returns the segmented correction log, or None when the run never left
-    the teacher's path (nothing to correct there). The person watches on after handing back:
-    where the network leaves the teacher's path again, they take over there too (the run
-    recorded again, tick for tick the same until then), up to ``takeovers`` times in all."""
+    the teacher's path (nothing to correct there). With ``takeovers`` > 1 the person watches on
+    after handing back: where the network leaves the teacher's path again, they take over there
+    too (the run recorded again, tick for tick the same until then), up to ``takeovers`` times."""
     plan = _plan_of(failed_log, teacher_xy, goals_at)
     if plan is None:
         return None

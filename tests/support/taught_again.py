@@ -33,7 +33,7 @@ from lfdfuse.log.reader import read_run
 from lfdfuse.network.table import FusionTable
 from lfdfuse.robot.pose import Pose
 from lfdfuse.segment.read import read_segmented
-from tests.support.corrections import record_correction
+from tests.support.corrections import TAKEOVERS, record_correction
 from tests.support.generated import THREE_GOALS, TIME_FACTOR
 from tests.support.generated_worlds import generate_offroute
 from tests.support.offroute import OffRouteCase, run_starts
@@ -153,9 +153,10 @@ def screen(seed: int, *, folder: Path, estimate: EstimateOptions = EstimateOptio
 
 
 def teach_again_screened(
-    s: Screened, *, folder: Path, estimate: EstimateOptions = EstimateOptions()
+    s: Screened, *, folder: Path, estimate: EstimateOptions = EstimateOptions(), takeovers: int = TAKEOVERS
 ) -> TaughtAgain:
-    """From a screened world: correct the first failing start once, learn again, run again."""
+    """From a screened world: correct the first failing start once (a person who takes over up
+    to ``takeovers`` times in that run), learn again, run again."""
     if not s.demo_completed or s.table is None:
         return TaughtAgain(s.seed, False, times=s.times)
     if all(s.before):
@@ -175,6 +176,7 @@ def teach_again_screened(
         goals_at=goals_at,
         max_time_s=s.max_time_s,
         out=folder / "correction.mcap",
+        takeovers=takeovers,
     )
     clock.lap("correct+segment")
     if corr is None:
@@ -217,11 +219,13 @@ def teach_again_screened(
     )
 
 
-def teach_again(seed: int, *, folder: Path, estimate: EstimateOptions = EstimateOptions()) -> TaughtAgain:
+def teach_again(
+    seed: int, *, folder: Path, estimate: EstimateOptions = EstimateOptions(), takeovers: int = TAKEOVERS
+) -> TaughtAgain:
     """Demonstrate, learn with sub-goals, run, correct the first failing start once, learn again, run."""
     folder.mkdir(parents=True, exist_ok=True)
     return teach_again_screened(
-        screen(seed, folder=folder, estimate=estimate), folder=folder, estimate=estimate
+        screen(seed, folder=folder, estimate=estimate), folder=folder, estimate=estimate, takeovers=takeovers
     )
 
 
