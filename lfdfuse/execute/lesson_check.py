@@ -21,7 +21,9 @@ starts (:meth:`~lfdfuse.execute.check.DemoWorld.starts`) and from each correctio
     the table had before as it was.
 
 It takes the first lesson that completes every check start the table before completed and the
-corrections' starts; else the first that keeps the check starts; else none (the table before).
+corrections' starts; else none (the table before). A lesson that does not carry the robot
+through from where the person corrected it has not taught what the person showed, whatever it
+does elsewhere: its re-weighted rows only move the robot about by chance, from other starts too.
 """
 
 from __future__ import annotations
@@ -119,7 +121,7 @@ def checked_lesson(
         return [rollout(table, home.world, s, home.max_time_s)[0] >= home.goals for s in at]
 
     base = completes(before, starts)
-    kept: tuple[str, FusionTable] | None = None
+    kept_starts = False
     for name, table in tried:
         done = completes(table, everywhere)
         if not all(d for d, b in zip(done, base, strict=False) if b):
@@ -128,11 +130,9 @@ def checked_lesson(
             return CheckedLesson(
                 table, name, f"{_count(done[: len(starts)], base)}; the correction's start completes"
             )
-        kept = kept or (name, table)
-    if kept is not None:
-        return CheckedLesson(
-            kept[1], kept[0], "keeps every check start; no lesson completes the correction's start"
-        )
+        kept_starts = True
+    if kept_starts:
+        return CheckedLesson(before, None, "no lesson completes the correction's start: correct it again")
     return CheckedLesson(before, None, "every lesson fails a check start the table before completed")
 
 

@@ -167,3 +167,16 @@ def test_a_lesson_that_breaks_a_start_the_table_completed_is_not_taken(
     assert got.lesson == "where taken over" and "completes" in got.why
     got = _checked(monkeypatch, {"before": "✓✗✓✗", "whole": "✗✓✓✓", "where taken over": "✓✗✗✓"})
     assert got.lesson is None and got.table == _before()
+
+
+def test_a_lesson_that_does_not_complete_the_corrections_start_is_not_taken(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # each lesson keeps every check start (the whole one completes a start more), neither carries
+    # the robot through from where the person corrected it
+    got = _checked(monkeypatch, {"before": "✓✗✓✗", "whole": "✓✓✓✗", "where taken over": "✓✗✓✗"})
+    assert got.lesson is None and got.table == _before()
+    assert "no lesson completes the correction's start" in got.why
+    # the same, but a smaller lesson completes it: that one is taken
+    got = _checked(monkeypatch, {"before": "✓✗✓✗", "whole": "✓✓✓✗", "where taken over": "✓✗✓✓"})
+    assert got.lesson == "where taken over"
