@@ -29,8 +29,8 @@ from lfdfuse.segment.track import LandmarkTrack
 #: second) before (:attr:`DecisionParams.shape_steps`): the person, taking over a moment before
 #: the place the robot missed, steers for the opening at once and cuts across its mouth, seeing
 #: its far wall at the onset, where the robot driving on along the corridor sees the way go on.
-#: Longer (25 steps) also read corners the person cut as side openings (a decision added where a
-#: correction on world 1700 needed none)
+#: A longer window also reads corners the person cut as side openings (a decision added where
+#: the rows alone would do)
 CORRECTION_SHAPE_STEPS = 5
 
 #: a goal met at tick ``m`` is the network's when its step within this many ticks before was that
