@@ -4,6 +4,7 @@ and a compression's error raised on close, never lost."""
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -41,17 +42,15 @@ def _write(path: Path, events: list[tuple[str, int, bytes]]) -> LogWriter:
     return log
 
 
-def _ways(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, events: list[tuple[str, int, bytes]]
-) -> list[bytes]:
-    """The file with chunks compressed on the thread, and mcap's own (in place)."""
+def _ways(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, write: Callable[[Path], LogWriter]) -> list[bytes]:
+    """The file ``write`` makes with chunks compressed on the thread, and with mcap's own (in place)."""
     files = []
     for way in ("thread", "mcap"):
         with monkeypatch.context() as m:
             if way == "mcap":
                 m.setattr(writer.BackgroundChunks, "of", classmethod(lambda cls, w: None))
             path = tmp_path / f"{way}.mcap"
-            log = _write(path, events)
+            log = write(path)
             assert (log._chunks is not None) == (way == "thread")
             files.append(path.read_bytes())
     return files
@@ -64,7 +63,7 @@ def test_a_file_with_chunks_compressed_beside_the_run_is_mcaps_byte_for_byte(
 ) -> None:
     # chunks of a few hundred bytes: a handful fill in one example, with records between them
     monkeypatch.setattr(writer, "CHUNK_SIZE", chunk_size)
-    threaded, plain = _ways(tmp_path, monkeypatch, events)
+    threaded, plain = _ways(tmp_path, monkeypatch, lambda path: _write(path, events))
     assert threaded == plain
     # and mcap's reader reads it back through its indexes: every message, none twice
     messages = [e for e in events if e[0].startswith("/")]
@@ -89,17 +88,15 @@ def test_a_long_run_is_mcaps_byte_for_byte_and_waits_for_no_chunk_but_the_last(
         finalize(self)
 
     monkeypatch.setattr(chunks.BackgroundChunks, "finalize", counted)
-    files = []
-    for way in ("thread", "mcap"):
-        with monkeypatch.context() as m:
-            if way == "mcap":
-                m.setattr(writer.BackgroundChunks, "of", classmethod(lambda cls, w: None))
-            path = tmp_path / f"{way}.mcap"
-            with LogWriter(path, metadata={"seed": "1"}) as log:
-                for t, tick in ticks:
-                    log.write_tick(t * 1000, tick)
-            files.append(path.read_bytes())
-    assert files[0] == files[1]
+
+    def write(path: Path) -> LogWriter:
+        with LogWriter(path, metadata={"seed": "1"}) as log:
+            for t, tick in ticks:
+                log.write_tick(t * 1000, tick)
+        return log
+
+    threaded, plain = _ways(tmp_path, monkeypatch, write)
+    assert threaded == plain
     # each chunk that filled during the run found the one before still waiting to be written: it
     # was compressed while the run went on. The last, at close, found none: the provenance
     # record written before it had written the one before
