@@ -28,10 +28,12 @@ from pathlib import Path
 
 import numpy as np
 
+from lfdfuse.evaluate.plot_data import contacts
 from lfdfuse.execute.check import path_points
 from lfdfuse.execute.correct import correct, correction_driver
 from lfdfuse.log import lfd
 from lfdfuse.log.reader import iter_messages, read_run
+from lfdfuse.log.run import hold
 from lfdfuse.network.table import FusionTable
 from lfdfuse.robot.pose import Pose
 from lfdfuse.segment.pipeline import segment_file
@@ -95,12 +97,14 @@ def correction_plan(
     dt_s: float,
     goals_at: Sequence[int] = (),
     reached_at: Sequence[int] | None = None,
+    hit_at: int | None = None,
 ) -> CorrectionPlan | None:
-    """Where the person takes over a run that left the teacher's path (None: it never left it);
-    ``goals_at``: the teacher's ticks where it reached a goal, in order; ``reached_at``: the
-    robot's ticks where it reached them, in order, as many as it reached (None: each in time). The
-    path near a goal the robot never reached must be met, and a robot that met the teacher's path
-    past it missed it there."""
+    """Where the person takes over a run that left the teacher's path or hit a wall, whichever
+    came first (None: it did neither); ``goals_at``: the teacher's ticks where it reached a goal,
+    in order; ``reached_at``: the robot's ticks where it reached them, in order, as many as it
+    reached (None: each in time); ``hit_at``: the robot's tick where it first hit a wall (None:
+    it never did). The path near a goal the robot never reached must be met, and a robot that met
+    the teacher's path past it missed it there."""
     reached = list(goals_at if reached_at is None else reached_at)
     skip = list(goals_at)[: len(reached)]
     pts = [
@@ -159,9 +163,17 @@ def correction_plan(
         # it met the whole path, and passed a goal at its end by without its camera reaching it
         missed = goals_at[len(reached)]
         last_i, last_t = max(((a, b) for a, b in met if a <= missed), default=(pts[0], 0))
-    if missed is None:
+    lead = round(LEAD_S / dt_s)
+    if hit_at is not None and (missed is None or hit_at < last_t):
+        # it hit a wall before it left the path: taken over before the wall, driven past it
+        lo = max((a for a, b in met if b <= hit_at), default=0)
+        hi = next((a for a, b in met if b > hit_at), len(teacher_xy) - 1)
+        last_i = missed = lo + int(np.argmin(np.hypot(*(teacher_xy[lo : hi + 1] - robot_xy[hit_at]).T)))
+        take = max(hit_at - lead, 1)
+    elif missed is None:
         return None
-    take = max(last_t - round(LEAD_S / dt_s), 1)
+    else:
+        take = max(last_t - lead, 1)
     # the path from the teacher's point nearest where the robot is at the takeover, up to the
     # first point the robot met after it (where the teacher drove in and out of a spur, the way
     # out passes where the robot is too, but the robot has not come to it yet)
@@ -288,13 +300,19 @@ class PathPerson:
         return [Input("message", twist_payload(v, w), SOURCE, TWIST_SCHEMA)]
 
 
-def _plan_of(log: Path, teacher_xy: np.ndarray, goals_at: Sequence[int]) -> CorrectionPlan | None:
-    """Where a person takes over the run of ``log`` (:func:`correction_plan`; None: it never left
-    the teacher's path, or the log has no poses)."""
+def _plan_of(
+    log: Path, teacher_xy: np.ndarray, goals_at: Sequence[int], world: World, *, after_s: float = 0.0
+) -> CorrectionPlan | None:
+    """Where a person takes over the run of ``log`` in ``world`` (:func:`correction_plan`; None: it
+    never left the teacher's path nor hit a wall, or the log has no poses); a wall hit before
+    ``after_s`` (s of the run: while the person drove) is not the network's."""
     run = read_run(log)
     if run.pose is None:
         return None
     dt_s = float(np.median(np.diff(run.t_ns))) / 1e9
+    # the log keeps no collisions: a contact began where a command did not move the robot
+    v = run.cmd_v_mps[hold(run.cmd_t_ns, run.t_ns)] if len(run.cmd_t_ns) else np.zeros(len(run))
+    hits = [int(h) for h in contacts(run.pose, v, world) if (run.t_ns[h] - run.t_ns[0]) / 1e9 >= after_s]
     achieved = [
         len(lfd.NetworkStep.decode(data).achieved)
         for *_, data in iter_messages(log, topics=[lfd.NetworkStep.TOPIC])
@@ -302,7 +320,9 @@ def _plan_of(log: Path, teacher_xy: np.ndarray, goals_at: Sequence[int]) -> Corr
     reached_at = [
         next(i for i, n in enumerate(achieved) if n >= k) for k in range(1, max(achieved, default=0) + 1)
     ]
-    return correction_plan(teacher_xy, np.asarray(run.pose[:, :2]), dt_s, goals_at, reached_at)
+    return correction_plan(
+        teacher_xy, np.asarray(run.pose[:, :2]), dt_s, goals_at, reached_at, hits[0] if hits else None
+    )
 
 
 def record_correction(
@@ -323,7 +343,7 @@ def record_correction(
     the teacher's path (nothing to correct there). With ``takeovers`` > 1 the person watches on
     after handing back: where the network leaves the teacher's path again, they take over there
     too (the run recorded again, tick for tick the same until then), up to ``takeovers`` times."""
-    plan = _plan_of(failed_log, teacher_xy, goals_at)
+    plan = _plan_of(failed_log, teacher_xy, goals_at, world)
     if plan is None:
         return None
     plans = [plan]
@@ -338,7 +358,7 @@ def record_correction(
         correct(opts, session=session, driver=driver, table_name="table.yaml", out=out)
         if driver.done or len(plans) >= takeovers or person.handed_back_s is None:
             break
-        again = _plan_of(out, teacher_xy, goals_at)
+        again = _plan_of(out, teacher_xy, goals_at, world, after_s=person.handed_back_s)
         if again is None or again.take_s <= plans[-1].take_s:
             break  # the network drove on along the path, or left it before the person drove
         # a network that leaves the path right after the hand-back is taken over again at once
