@@ -1,4 +1,4 @@
-"""A scripted person who corrects a learned table where its robot left the teacher's path.
+"""A scripted person who corrects a learned table where its robot left the teacher's path or hit a wall.
 
 Given a failed run of the table (its log) and the teacher's path, :func:`correction_plan` finds
 where the robot left the path: the last point of the teacher's path it met in order (as
@@ -9,10 +9,16 @@ followed. Where the teacher reached a goal the robot reached too, the points wit
 :data:`GOAL_M` of it need not be met (the robot reaches a goal from where its camera sees it);
 a robot that met the path past a goal before it reached it (only coming round again) missed it
 there, and so did a robot that met the path all the way but never reached a goal on it (drove
-past it out of the camera's reach). :func:`record_correction` then runs ``teleop --table`` from the same start and seed —
-tick for tick the failed run until the person takes over — and a :class:`PathPerson` takes over a little before that point, drives the teacher's path (pure
-pursuit, as a Twist client would) through the place the robot missed and some metres past it,
-and hands back; the network drives on. A robot the person drives into a wall (pursuit cutting a
+past it out of the camera's reach). A robot that hit a wall before it left the path so (the log
+keeps no collisions: :func:`lfdfuse.evaluate.plot_data.contacts` reads where a contact began) is
+taken over before it: a person takes over before the wall, not after. Where it hit the wall
+beside the path, the place is the wall; where it hit one off the path (in a dead end it turned
+into and came back out of, which alone is not corrected), the place is where it last was on the
+path, before it turned off. :func:`record_correction` then runs ``teleop --table`` from the same
+start and seed — tick for tick the failed run until the person takes over — and a
+:class:`PathPerson` takes over a little (:data:`LEAD_S`) before that place, drives the teacher's
+path (pure pursuit, as a Twist client would) through the place and :data:`PAST_M` past it, and
+hands back; the network drives on. A robot the person drives into a wall (pursuit cutting a
 corner) is backed off and the path followed tighter. One correction is one takeover; a person
 who watches on (``takeovers`` > 1) takes over again where the network, handed back, leaves the
 teacher's path again.
@@ -44,8 +50,9 @@ from lfdfuse.sources.teleop.session import TeleopOptions, TeleopSession, make_se
 from lfdfuse.world.model import World
 
 #: the person takes over this long (s) before the robot met the last point of the path it followed
+#: (or before it hit a wall)
 LEAD_S = 2.0
-#: and drives the teacher's path this far (m) past the first point the robot missed
+#: and drives the teacher's path this far (m) past the first point the robot missed (or the wall)
 PAST_M = 6.0
 RADIUS_M = 1.0  # a path point is met within this (as the check's)
 #: the robot has left the path where it is this far (m) from the stretch between the last point it
@@ -164,12 +171,15 @@ def correction_plan(
         missed = goals_at[len(reached)]
         last_i, last_t = max(((a, b) for a, b in met if a <= missed), default=(pts[0], 0))
     lead = round(LEAD_S / dt_s)
-    if hit_at is not None and (missed is None or hit_at < last_t):
-        # it hit a wall before it left the path: taken over before the wall, driven past it
-        lo = max((a for a, b in met if b <= hit_at), default=0)
-        hi = next((a for a, b in met if b > hit_at), len(teacher_xy) - 1)
-        last_i = missed = lo + int(np.argmin(np.hypot(*(teacher_xy[lo : hi + 1] - robot_xy[hit_at]).T)))
-        take = max(hit_at - lead, 1)
+    on = None if hit_at is None else _last_on_path(teacher_xy, robot_xy, hit_at)
+    if on is not None and (missed is None or on < last_t):
+        # it hit a wall before it left the path for good: taken over before the wall, or before
+        # it turned off the path where it hit one off it (a dead end it came back out of), and
+        # driven past there; the path met before and after (a point is met up to RADIUS_M short)
+        lo = ([0, 0] + [a for a, b in met if b <= on])[-2]
+        hi = next((a for a, b in met if b > on), len(teacher_xy) - 1)
+        last_i = missed = lo + int(np.argmin(np.hypot(*(teacher_xy[lo : hi + 1] - robot_xy[on]).T)))
+        take = max(on - lead, 1)
     elif missed is None:
         return None
     else:
@@ -184,6 +194,14 @@ def correction_plan(
     end = min(int(np.searchsorted(arc, arc[missed] + PAST_M)), len(teacher_xy) - 1)
     return _driving_into_goals(
         teacher_xy, take * dt_s, start, end, [g for g in goals_at if start <= g <= end]
+    )
+
+
+def _last_on_path(teacher_xy: np.ndarray, robot_xy: np.ndarray, hit_at: int) -> int:
+    """The robot's last tick up to ``hit_at`` within :data:`RADIUS_M` of the teacher's path (0:
+    none): ``hit_at`` where it hit a wall beside the path, where it turned off before one off it."""
+    return next(
+        (t for t in range(hit_at, -1, -1) if np.min(np.hypot(*(teacher_xy - robot_xy[t]).T)) <= RADIUS_M), 0
     )
 
 

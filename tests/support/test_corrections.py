@@ -6,12 +6,15 @@ import json
 from collections.abc import Callable
 
 import numpy as np
+import pytest
 
 from lfdfuse.robot.pose import Pose
 from tests.support.corrections import (
     BACK_S,
     INTO_GOAL_M,
+    LEAD_S,
     LEAVE_M,
+    PAST_M,
     STALL_S,
     STUCK_S,
     CorrectionPlan,
@@ -88,6 +91,64 @@ def test_a_robot_that_dithers_is_taken_over_where_it_stalled() -> None:
     plan = correction_plan(TEACHER, robot, DT_S)
     assert plan is not None
     assert 6.5 < robot[round(plan.take_s / DT_S), 0] <= 8.3
+
+
+def test_a_robot_that_follows_the_path_and_hits_a_wall_is_taken_over_before_it() -> None:
+    # within the corridor all the way (not corrected), but it brushed a wall 12 m along: the
+    # person takes over LEAD_S before and drives the teacher's path past where it hit
+    robot = TEACHER + np.array([0.0, 0.8])
+    hit = int(np.searchsorted(robot[:, 0], 12.0))
+    assert correction_plan(TEACHER, robot, DT_S) is None
+    plan = correction_plan(TEACHER, robot, DT_S, hit_at=hit)
+    assert plan is not None
+    assert round(plan.take_s / DT_S) == hit - round(LEAD_S / DT_S)
+    x_take = robot[round(plan.take_s / DT_S), 0]
+    assert plan.path_xy[0, 0] == pytest.approx(x_take, abs=STEP_M)
+    assert plan.path_xy[-1, 0] == pytest.approx(12.0 + PAST_M, abs=STEP_M)
+
+
+def test_a_robot_that_left_the_path_before_it_hit_a_wall_keeps_that_takeover() -> None:
+    # into a dead end (as above), where it hits the wall at the end: the person takes over at
+    # the mouth, where it left the path, and a wall hit before it left is taken over there
+    lap = np.concatenate(
+        [
+            _line((0.0, 0.0), (8.0, 0.0)),
+            _line((8.0, 0.0), (8.0, DEAD_END_M)),
+            _line((8.0, DEAD_END_M), (8.0, 0.0)),
+            _line((8.0, 0.0), (0.0, 0.0)),
+            _line((0.0, 0.0), (20.0, 0.0)),
+        ]
+    )
+    left = correction_plan(TEACHER, lap, DT_S)
+    assert left is not None
+    in_dead_end = int(np.argmax(lap[:, 1]))
+    kept = correction_plan(TEACHER, lap, DT_S, hit_at=in_dead_end)
+    assert kept is not None and kept.take_s == left.take_s and np.array_equal(kept.path_xy, left.path_xy)
+    before = len(_line((0.0, 0.0), (4.0, 0.0)))
+    plan = correction_plan(TEACHER, lap, DT_S, hit_at=before)
+    assert plan is not None and plan.take_s < left.take_s
+    assert plan.path_xy[-1, 0] == pytest.approx(4.0 + PAST_M, abs=STEP_M)
+
+
+def test_a_robot_that_hits_a_wall_in_a_dead_end_it_came_back_out_of_is_taken_over_before_it() -> None:
+    # into a dead end the teacher passed by, against its end wall, back out and on along the
+    # path (not corrected alone): the person takes over before the robot turned off the path
+    # and drives the path on past the dead end's mouth
+    out_and_on = np.concatenate(
+        [
+            _line((0.0, 0.0), (8.0, 0.0)),
+            _line((8.0, 0.0), (8.0, DEAD_END_M)),
+            _line((8.0, DEAD_END_M), (8.0, 0.0)),
+            _line((8.0, 0.0), (20.0, 0.0)),
+            [[20.0, 0.0]],
+        ]
+    )
+    assert correction_plan(TEACHER, out_and_on, DT_S) is None
+    plan = correction_plan(TEACHER, out_and_on, DT_S, hit_at=int(np.argmax(out_and_on[:, 1])))
+    assert plan is not None
+    x_take, y_take = out_and_on[round(plan.take_s / DT_S)]
+    assert 6.0 < x_take <= 8.0 and y_take < 0.5  # at the mouth, not inside
+    assert plan.path_xy[0, 0] <= 8.0 and plan.path_xy[-1, 0] > 8.0 + PAST_M - 1.0
 
 
 def _spur_to_a_goal() -> tuple[np.ndarray, int]:
