@@ -3,8 +3,8 @@
 From seed 1640 up (never used before: the ``generated`` bench and the README's rate stop at
 1639), every generated off-route world's three-goal demo is learned with sub-goals and run from 4
 perturbed starts; where one fails, one scripted correction from the first failing start (the
-teacher's path where the robot left it, :mod:`tests.support.corrections`) and a re-estimate of
-demo and correction with sub-goals (:mod:`tests.support.taught_again`). Worlds are taken until
+teacher's path where the robot left it or before it hit a wall, :mod:`tests.support.corrections`)
+and a re-estimate of demo and correction with sub-goals (:mod:`tests.support.taught_again`). Worlds are taken until
 ``WANTED`` have a failing start (8 with ``--quick``), at most ``MAX_WORLDS``. One row per world
 with a failing start, then the summary: fixed (the failing start and ≥ 2 of 3 others complete)
 and regressions (starts that completed before and fail after).

@@ -51,7 +51,8 @@ class TaughtAgain:
     demo_completed: bool
     before: tuple[bool, ...] = ()
     failing: int | None = None  # index of the start corrected
-    corrected: bool = False  # a correction was recorded (the failing run left the teacher's path)
+    #: a correction was recorded (the failing run left the teacher's path or hit a wall)
+    corrected: bool = False
     after: tuple[bool, ...] = ()
     verdicts: tuple[str, ...] = ()
     table_before: FusionTable | None = field(default=None, compare=False)
