@@ -23,7 +23,8 @@ from pathlib import Path
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.demo_alignment import same_behaviors
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run, estimate_runs
-from lfdfuse.estimate.pooled_subgoals import Verdict, pool_subgoals
+from lfdfuse.estimate.pooled_rows import Weighing
+from lfdfuse.estimate.pooled_subgoals import PooledSubgoals, Verdict, pool_subgoals
 from lfdfuse.estimate.sub_step_corrections import FurtherDemo, taken_over
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.check import CHECK_STARTS, DemoWorld, demo_world
@@ -216,7 +217,9 @@ def _learn_subgoals_pooled(
     demos: Sequence[str | Path], names: Sequence[str], options: LearnOptions, progress: Progress | None
 ) -> LearnResult:
     """Sub-goals from several demos (:mod:`lfdfuse.estimate.pooled_subgoals`): the first demo
-    learned (and checked) as alone, the others' decisions matched to its, their rows pooled."""
+    learned (and checked) as alone, the others' decisions matched to its, their rows pooled; with
+    a correction, the lesson checked in the demo's world (:mod:`lfdfuse.execute.lesson_check`: the
+    person-weighted tables estimated only if no pooled lesson is taken)."""
     read = [read_segmented_and_run(d) for d in demos]
     runs = [run for run, _ in read]
     why = same_behaviors(runs, names)
@@ -244,16 +247,21 @@ def _learn_subgoals_pooled(
         )
         for name, src, (r, w) in zip(names[1:], demos[1:], read[1:], strict=True)
     ]
-    res = pool_subgoals(
-        first=run,
-        first_name=names[0],
-        paper=paper,
-        table=table,
-        decisions=decisions,
-        others=others,
-        opts=options.estimate,
-        params=options.decisions,
-    )
+
+    def pooled(weighing: Weighing = "pool") -> PooledSubgoals:
+        return pool_subgoals(
+            first=run,
+            first_name=names[0],
+            paper=paper,
+            table=table,
+            decisions=decisions,
+            others=others,
+            opts=options.estimate,
+            params=options.decisions,
+            weighing=weighing,
+        )
+
+    res = pooled()
     built, checked = res.table, None
     if home is not None and options.check_starts is not None and any(o.correction for o in others):
         checked = checked_lesson(
@@ -267,6 +275,7 @@ def _learn_subgoals_pooled(
                 for o, (_, w) in zip(others, read[1:], strict=True)
                 if o.correction and w.pose is not None and len(w.pose) and w.world_yaml == raw.world_yaml
             ],
+            weighed=lambda weighing: pooled(weighing).table,
         )
         built = checked.table
     tell(progress, 1.0, 1.0)

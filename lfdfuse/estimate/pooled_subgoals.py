@@ -31,6 +31,12 @@ person's correction (a ``teleop --table`` log: only the person's ticks are infor
   corrected is bit-identical. A new turn step's rows are the person's turn alone. A row the
   first demo pins that corrections add only a few ticks to (fewer than a row needs) stays as it
   is: one manoeuvre somewhere the row drives is no lesson for everywhere it drives.
+* **The person's weight** (``weighing``, :mod:`lfdfuse.estimate.pooled_rows`): pooled, the
+  demo's many steps in a row outweigh the person's ticks (a row of a thousand demo steps barely
+  moves for 160 person ticks). In the goal steps the person took over, a row the person drove
+  (a row's worth of ticks or more) can instead weigh the person's ticks ``even`` with the demo's
+  (its steps thinned evenly to as many) or take the ``person``'s alone; ``pool`` (the default)
+  is the product over every step, as above.
 """
 
 from __future__ import annotations
@@ -42,10 +48,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from lfdfuse.errors import ConfigError
-from lfdfuse.estimate.baselines import angle_errors
-from lfdfuse.estimate.commands import Commands, commands_of
-from lfdfuse.estimate.demo_alignment import align, problem_of, row_rng
-from lfdfuse.estimate.methods import EstimateOptions, estimate_groups
+from lfdfuse.estimate.commands import commands_of
+from lfdfuse.estimate.demo_alignment import align
+from lfdfuse.estimate.methods import EstimateOptions
+from lfdfuse.estimate.pooled_rows import WEIGHINGS, Weighing, pooled_leaf
 from lfdfuse.estimate.sub_step_corrections import (
     FurtherDemo,
     Inserted,
@@ -54,16 +60,15 @@ from lfdfuse.estimate.sub_step_corrections import (
     goals_once,
     inside_decision,
     labelled_parts,
+    taken_over,
     unique_steps,
 )
 from lfdfuse.estimate.subgoals import decision_steps
 from lfdfuse.network.landmark_goals import Landmark, OpeningCount
-from lfdfuse.network.table import FusionRow, FusionTable, Network, Step
+from lfdfuse.network.table import FusionTable, Network, Step
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint, split_segments
 from lfdfuse.segment.read import SegmentedRun
 
-#: a row of a sub-step pooled over demos draws from ``row_rng(seed, SUBSTEP, leaf, bac)``
-SUBSTEP = 2
 #: two decisions are one place when their distances from the sub-segment's start differ by at
 #: most this share of the first's, or by ``MATCH_MIN_M`` ...
 MATCH_SHARE = 0.3
@@ -128,10 +133,15 @@ def pool_subgoals(
     others: Sequence[FurtherDemo],
     opts: EstimateOptions,
     params: DecisionParams = DecisionParams(),
+    weighing: Weighing = "pool",
 ) -> PooledSubgoals:
     """``table`` (the first demo's with sub-goals, ``decisions`` its decision points; ``paper``
     the first demo's table without) with the further demos' decisions matched, added or dropped
-    and the rows they drive in pooled (see the module docstring)."""
+    and the rows they drive in pooled, the corrections' ticks weighed by ``weighing`` in the goal
+    steps their persons took over (see the module docstring)."""
+    if weighing not in WEIGHINGS:
+        raise ConfigError(f"weighing {weighing!r}: one of {', '.join(WEIGHINGS)}")
+    over = taken_over(others) if weighing != "pool" else set()
     goals = {
         st.name: seg.goal
         for st, seg in zip(table.network.steps, first.segments, strict=False)
@@ -269,6 +279,7 @@ def pool_subgoals(
         names,
         {j: v for j, v in labelled.items() if j not in dropped or j in replaced},
         inserted,
+        {name: weighing for name in over},
     )
     kept = tuple(s.decision for j in goal_steps for s in out_slots[j] if s.source == 0)
     return PooledSubgoals(built, tuple(verdicts), kept)
@@ -293,10 +304,12 @@ def _build(
     names: Sequence[str],
     labelled: dict[int, set[int]],
     inserted: dict[int, list[Inserted]],
+    weighings: Mapping[str, Weighing],
 ) -> FusionTable:
     """The table with each goal step's final sub-goals (``slots``), every leaf's rows pooled;
     ``labelled``: per goal step the corrections whose ticks go to the sub-step the network was
-    in, ``inserted`` their decisions inside sub-steps."""
+    in, ``inserted`` their decisions inside sub-steps; ``weighings``: per goal step (by name)
+    how the corrections' ticks weigh in its rows where not ``pool``."""
     runs = [first, *(o.run for o in others)]
     models = [
         commands_of(run, requested=opts.commands, recheck_s=opts.model.recheck_s, nudge_s=opts.model.nudge_s)
@@ -308,14 +321,16 @@ def _build(
     ]
     corrections = {e for e, o in enumerate(others, start=1) if o.correction}
     count = 0
+    weighing: Weighing = "pool"
 
     def leaf(base: Step, parts: Sequence[tuple[int, np.ndarray]]) -> Step:
         nonlocal count
         count += 1
-        return _pooled_leaf(count - 1, base, parts, views, models, opts, corrections)
+        return pooled_leaf(count - 1, base, parts, views, models, opts, corrections, weighing)
 
     built: list[Step] = []
     for j, old in enumerate(table.network.steps):
+        weighing = weighings.get(old.name, "pool")
         mine = slots.get(j)
         whole = [(e, t) for e in range(len(runs)) if len(t := _ticks(views[e], step_of[e], j))]
         if mine is None or not mine:
@@ -407,65 +422,3 @@ def _by_distance(mark: Landmark | None, within_m: float) -> Landmark | None:
     if mark is None or mark.kind != "opening" or mark.odometry_m is None:
         return mark
     return replace(mark, within_m=round(within_m, 2), count=OpeningCount.ALL)
-
-
-def _pooled_leaf(
-    leaf_no: int,
-    base: Step,
-    parts: Sequence[tuple[int, np.ndarray]],
-    views: Sequence[SegmentedRun],
-    models: Sequence[Commands],
-    opts: EstimateOptions,
-    corrections: Collection[int] = (),
-) -> Step:
-    """``base`` with every row a further demo (any but the first) adds steps to estimated again
-    on the pooled steps of ``parts``; its other rows as they are. A row the first demo pins
-    (``opts.min_samples`` steps or more) that only ``corrections`` add to, fewer steps than that
-    in all, stays as it is: a person's few ticks in a row are one manoeuvre somewhere the row
-    drives (the mouth of a dead end, a drive on past a goal), and the row drives everywhere
-    its BAC comes up in the step, where the demo's many steps showed how."""
-    behaviors = views[0].names
-    by_bac: dict[int, list[tuple[int, np.ndarray]]] = {}
-    for e, ticks in parts:
-        bac = views[e].bac[ticks]
-        for b in sorted(set(bac.tolist())):
-            if b:
-                by_bac.setdefault(int(b), []).append((e, ticks[bac == b]))
-    rows = {r.bac: r for r in base.fusion}
-    bins = models[0].bins
-    changed = False
-    for b, bparts in sorted(by_bac.items()):
-        added = sum(len(t) for e, t in bparts if e != 0)
-        if not added:
-            continue
-        before = rows.get(b)
-        if (
-            before is not None
-            and added < opts.min_samples <= (before.samples or 0)
-            and all(e in corrections for e, t in bparts if e != 0 and len(t))
-        ):
-            continue
-        app = tuple(i for i in range(len(behaviors)) if b >> i & 1)
-        p = problem_of(bparts, views, app, models, bins)
-        est = estimate_groups([p], opts=opts, rng=row_rng(opts.seed, SUBSTEP, leaf_no, b), bins=bins)[0]
-        err = float(np.degrees(angle_errors(p.vectors, p.demo, est.weights).mean()))
-        app_names = [behaviors[i] for i in app]
-        total = sum(len(t) for _, t in bparts)
-        changed = True
-        rows[b] = FusionRow(
-            bac=b,
-            weights={nm: float(x) for nm, x in zip(app_names, est.weights, strict=True)},
-            std={nm: float(x) for nm, x in zip(app_names, est.std, strict=True)},
-            samples=total,
-            fit_error_deg=err if math.isfinite(err) else 180.0,
-            low_samples=total < opts.min_samples,
-            trial_std=None
-            if est.trial_std is None
-            else {nm: float(x) for nm, x in zip(app_names, est.trial_std, strict=True)},
-            identifiable=est.identifiable,
-            samples_added=added,
-            weights_before=None if before is None else dict(before.weights),
-        )
-    if not changed:
-        return base
-    return replace(base, fusion=tuple(rows[b] for b in sorted(rows)))

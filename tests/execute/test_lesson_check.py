@@ -180,3 +180,101 @@ def test_a_lesson_that_does_not_complete_the_corrections_start_is_not_taken(
     # the same, but a smaller lesson completes it: that one is taken
     got = _checked(monkeypatch, {"before": "✓✗✓✗", "whole": "✓✓✓✗", "where taken over": "✓✗✓✓"})
     assert got.lesson == "where taken over"
+
+
+#: the person-weighted tables' weights (reach-blue's, the turn's)
+WEIGHED = {"person": (85, 85), "even": (90, 90)}
+
+
+def _laddered(
+    monkeypatch: pytest.MonkeyPatch, outcome: dict[str, str], *, moved: bool = True
+) -> tuple[lesson_check.CheckedLesson, list[str], int]:
+    """As :func:`_checked`, with the person-weighted tables too (``outcome`` keys ``person`` and
+    ``even``); also which weighings were made, in order, and how many rollouts were driven.
+    ``moved``: whether weighing moves any row (else the weighed table is the pooled one)."""
+    before = _before()
+    whole = _reweighted(before, {"reach-blue", "reach-green/turn-left"}, 0.95)
+    w = {"before": (70, 20), "whole": (95, 95), "where taken over": (70, 95), **WEIGHED}
+    completes = {(w[k], float(x)): c == "✓" for k, marks in outcome.items() for x, c in enumerate(marks)}
+    stand_in = _fake_rollout(completes)
+    driven = [0]
+
+    def counted(table: FusionTable, world: World, start: Pose, max_time_s: float) -> tuple[int, np.ndarray]:
+        driven[0] += 1
+        return stand_in(table, world, start, max_time_s)
+
+    monkeypatch.setattr(lesson_check, "rollout", counted)
+    made: list[str] = []
+
+    def weighed(weighing: str) -> FusionTable:
+        made.append(weighing)
+        if not moved:
+            return whole
+        return _reweighted(before, {"reach-blue", "reach-green/turn-left"}, WEIGHED[weighing][0] / 100)
+
+    home = DemoWorld(None, Pose(0, 0, 0), np.zeros((2, 2)), 10.0, 3)  # type: ignore[arg-type]  # unused by the stand-in
+    starts = [Pose(float(x), 0.0, 0.0) for x in range(3)]
+    got = checked_lesson(
+        before,
+        whole,
+        taken_over={"reach-green"},
+        home=home,
+        starts=starts,
+        corrections=[Pose(3.0, 0, 0)],
+        weighed=weighed,  # type: ignore[arg-type]
+    )
+    return got, made, driven[0]
+
+
+#: neither pooled lesson completes the correction's start (the whole one keeps every check start)
+POOLED_FAIL = {"before": "✓✗✓✗", "whole": "✓✓✓✗", "where taken over": "✓✗✓✗"}
+
+
+def test_the_person_weighted_tables_are_made_only_when_no_pooled_lesson_is_taken(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    got, made, _ = _laddered(monkeypatch, {"before": "✓✗✓✗", "whole": "✓✓✓✓", "where taken over": "✓✓✓✓"})
+    assert got.lesson == "whole" and made == []
+    got, made, _ = _laddered(monkeypatch, {"before": "✓✗✓✗", "whole": "✗✓✓✓", "where taken over": "✓✗✓✓"})
+    assert got.lesson == "where taken over" and made == []
+
+
+def test_the_ladder_tries_the_persons_ticks_alone_then_even_with_the_demos(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    ok, fails_start, misses_corr = "✓✗✓✓", "✗✗✓✓", "✓✗✓✗"
+    alone = "whole, the person's ticks alone"
+    even = "whole, the person's ticks weighed even with the demo's"
+    for person, then, lesson, made_ in [
+        (ok, ok, alone, ["person"]),
+        (ok, fails_start, alone, ["person"]),
+        (fails_start, ok, even, ["person", "even"]),
+        (misses_corr, ok, even, ["person", "even"]),
+    ]:
+        got, made, _ = _laddered(monkeypatch, POOLED_FAIL | {"person": person, "even": then})
+        assert got.lesson == lesson and made == made_, (person, then, got)
+        assert got.table != _before() and "the correction's start completes" in got.why
+        assert got.describe().startswith(f"lesson checked in the demo's world: {lesson}: ")
+    for person, then in [(misses_corr, misses_corr), (fails_start, misses_corr)]:
+        got, made, _ = _laddered(monkeypatch, POOLED_FAIL | {"person": person, "even": then})
+        assert got.lesson is None and got.table == _before() and made == ["person", "even"]
+        assert "no lesson completes the correction's start" in got.why
+    # the same acceptance rule as the pooled lessons: none keeps every check start
+    got, _, _ = _laddered(
+        monkeypatch,
+        {
+            "before": "✓✗✓✗",
+            "whole": "✗✓✓✓",
+            "where taken over": "✗✗✓✓",
+            "person": fails_start,
+            "even": fails_start,
+        },
+    )
+    assert got.lesson is None and "every lesson fails a check start" in got.why
+
+
+def test_a_weighing_that_moves_no_row_is_not_driven_again(monkeypatch: pytest.MonkeyPatch) -> None:
+    _, made, driven = _laddered(monkeypatch, POOLED_FAIL, moved=False)
+    assert made == ["person", "even"]
+    # the table before from the check starts, each pooled lesson from every start; nothing more
+    assert driven == 3 + 2 * 4

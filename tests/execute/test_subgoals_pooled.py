@@ -241,6 +241,61 @@ def test_a_correction_in_a_sub_step_re_weights_that_sub_step_alone(read: Read, r
             assert q == r or (q.samples_added and q.weights_before == r.weights), (n, r.bac)
 
 
+def test_the_persons_weight_moves_only_rows_they_drove_enough_in_where_they_took_over(
+    read: Read, refined: LearnResult
+) -> None:
+    """The correction of the test before (the person past the turn into the spur, in reach-green's
+    last sub-step) pooled with each weighing: ``pool`` is the default's table; ``even`` and
+    ``person`` change only rows the person drove ``min_samples`` ticks or more in, there estimated
+    on as many demo steps as person ticks (fewer where the demo has fewer) or on the person's
+    alone; every other row, step and landmark is the pooled table's, bit for bit."""
+    from lfdfuse.estimate.pooled_subgoals import pool_subgoals
+    from lfdfuse.estimate.sub_step_corrections import FurtherDemo
+
+    run, track, paper = read.run, read.track, read.paper
+    table = refined.table
+    (d,) = [d for d in refined.decisions if table.network.steps[d.segment].name == "reach-green"]
+    seg = run.segments[d.segment]
+    person = np.zeros(len(run.t_ns), dtype=bool)
+    person[d.turn_end + 30 : seg.stop] = True
+    fix = replace(run, informative=run.informative & person)
+    steps = _labels(run, table, refined.decisions)
+
+    def pooled(**weighing: str) -> FusionTable:
+        return pool_subgoals(
+            first=run,
+            first_name="demo",
+            paper=paper,
+            table=table,
+            decisions=refined.decisions,
+            others=[FurtherDemo("fix", fix, track, correction=True, steps=steps)],
+            opts=OPTS,
+            **weighing,  # type: ignore[arg-type]
+        ).table
+
+    pool = pooled()
+    assert pooled(weighing="pool") == pool
+    drove = np.bincount(run.bac[fix.informative], minlength=64)
+    moved = set()
+    for weighing in ("even", "person"):
+        got = pooled(weighing=weighing)
+        a, b = named_leaf_steps(pool), named_leaf_steps(got)
+        assert [(n, s.landmark) for n, s in a] == [(n, s.landmark) for n, s in b]
+        for (n, s), (_, t) in zip(a, b, strict=True):
+            rows = {r.bac: r for r in t.fusion}
+            assert sorted(rows) == [r.bac for r in s.fusion]
+            for r in s.fusion:
+                q = rows[r.bac]
+                if n != "reach-green/reach-green" or drove[r.bac] < OPTS.min_samples:
+                    assert q == r, (weighing, n, r.bac)
+                    continue
+                moved.add(weighing)
+                mine = int(drove[r.bac])
+                demo = (r.samples or 0) - mine  # the pooled row: the demo's steps and the person's
+                assert q.samples == (mine if weighing == "person" else mine + min(demo, mine))
+    assert moved == {"even", "person"}
+
+
 def test_a_persons_few_ticks_leave_a_row_the_demo_pins_as_it_was(read: Read, refined: LearnResult) -> None:
     """The demo read as a correction in the goal step's last sub-step, the person driving from
     several places past the turn on: each row of that sub-step the person added fewer ticks to
