@@ -133,15 +133,30 @@ def follow(
     return len(pts), None, last
 
 
-def rollout(
-    table: FusionTable, world: World, start: Pose, max_time_s: float, seed: int = 0
-) -> tuple[int, np.ndarray]:
-    """Goals reached and poses ``(n, 3)`` of the table driven from ``start`` (noise-free sensing)."""
+@dataclass(frozen=True)
+class Drive:
+    """A table driven from a start: the goals it reached, its wall hits, its poses ``(n, 3)``."""
+
+    goals: int
+    collisions: int
+    poses: np.ndarray
+
+
+def drive(table: FusionTable, world: World, start: Pose, max_time_s: float, seed: int = 0) -> Drive:
+    """The table driven from ``start`` (noise-free sensing), as ``execute`` drives it."""
     rng = np.random.default_rng(seed)
     drv = NetworkStepper(table=table, world=world, sensors=SensorParams(), rng=rng)
     sim = Simulator(world, rng, SensorParams(), drv.robot)
     s = run(sim, drv, start=start, duration_s=max_time_s)
-    return len(s.reached), s.poses
+    return Drive(len(s.reached), s.collisions, s.poses)
+
+
+def rollout(
+    table: FusionTable, world: World, start: Pose, max_time_s: float, seed: int = 0
+) -> tuple[int, np.ndarray]:
+    """Goals reached and poses ``(n, 3)`` of the table driven from ``start`` (noise-free sensing)."""
+    d = drive(table, world, start, max_time_s, seed)
+    return d.goals, d.poses
 
 
 def check(table: FusionTable, world: World, start: Pose, teacher_xy: np.ndarray, max_time_s: float) -> Check:

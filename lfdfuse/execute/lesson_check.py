@@ -40,6 +40,9 @@ It takes the first lesson that completes every check start the table before comp
 corrections' starts; else none (the table before). A lesson that does not carry the robot
 through from where the person corrected it has not taught what the person showed, whatever it
 does elsewhere: its re-weighted rows only move the robot about by chance, from other starts too.
+A start *completes* when the robot reaches every goal without a wall hit, as the benches count
+it (a person who takes over before a wall showed a way past it); a check start the table before
+drove to every goal with a hit must still reach every goal.
 """
 
 from __future__ import annotations
@@ -48,7 +51,7 @@ from collections.abc import Callable, Collection, Iterator, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
-from lfdfuse.execute.check import DemoWorld, rollout
+from lfdfuse.execute.check import DemoWorld, drive
 from lfdfuse.network.table import FusionTable, Network, Step
 from lfdfuse.robot.pose import Pose
 
@@ -148,18 +151,25 @@ def checked_lesson(
         return CheckedLesson(whole, "whole", "no row or step changed")
     everywhere = [*starts, *corrections]
 
-    def completes(table: FusionTable, at: Sequence[Pose]) -> list[bool]:
-        return [rollout(table, home.world, s, home.max_time_s)[0] >= home.goals for s in at]
+    def outcomes(table: FusionTable, at: Sequence[Pose]) -> list[tuple[bool, bool]]:
+        """Per start: every goal reached, and that without a wall hit (completed)."""
+        out = []
+        for s in at:
+            d = drive(table, home.world, s, home.max_time_s)
+            out.append((d.goals >= home.goals, d.goals >= home.goals and d.collisions == 0))
+        return out
 
-    base = completes(before, starts)
+    base = outcomes(before, starts)
     kept_starts = False
     for name, table in _ladder(before, tried, weighed):
-        done = completes(table, everywhere)
-        if not all(d for d, b in zip(done, base, strict=False) if b):
+        done = outcomes(table, everywhere)
+        if not all(d[k] for d, b in zip(done, base, strict=False) for k in (0, 1) if b[k]):
             continue
-        if all(done[len(starts) :]):
+        if all(d[1] for d in done[len(starts) :]):
             return CheckedLesson(
-                table, name, f"{_count(done[: len(starts)], base)}; the correction's start completes"
+                table,
+                name,
+                f"{_count([d[1] for d in done[: len(starts)]], [b[1] for b in base])}; the correction's start completes",
             )
         kept_starts = True
     if kept_starts:

@@ -16,7 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lfdfuse.execute import lesson_check
-from lfdfuse.execute.check import DemoWorld
+from lfdfuse.execute.check import DemoWorld, Drive
 from lfdfuse.execute.lesson_check import checked_lesson, lessons
 from lfdfuse.network.landmark_goals import Landmark
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step, named_leaf_steps
@@ -123,31 +123,38 @@ def test_a_smaller_lesson_keeps_every_row_outside_it_bit_for_bit(
     assert all(a != b for i, a in enumerate(tables) for b in tables[:i])
 
 
-Rollout = Callable[[FusionTable, World, Pose, float], tuple[int, np.ndarray]]
+Drives = Callable[[FusionTable, World, Pose, float], Drive]
 
 
-def _fake_rollout(completes: dict[tuple[tuple[int, int], float], bool]) -> Rollout:
-    """A rollout that reaches every goal where ``completes[(table's weights, start x)]`` (the
-    weights: of reach-blue's and of the turn's first row, in hundredths)."""
+def _fake_rollout(completes: dict[tuple[tuple[int, int], float], bool | str]) -> Drives:
+    """A drive that reaches every goal where ``completes[(table's weights, start x)]`` (the
+    weights: of reach-blue's and of the turn's first row, in hundredths), with a wall hit where
+    it is ``"!"``."""
 
-    def rollout(table: FusionTable, world: World, start: Pose, max_time_s: float) -> tuple[int, np.ndarray]:
+    def drive(table: FusionTable, world: World, start: Pose, max_time_s: float) -> Drive:
         steps = dict(named_leaf_steps(table))
         key = tuple(
             round(steps[n].fusion[0].weights["a"] * 100) for n in ("reach-blue", "reach-green/turn-left")
         )
-        return (3 if completes[((key[0], key[1]), start.x)] else 1), np.zeros((1, 3))
+        got = completes[((key[0], key[1]), start.x)]
+        return Drive(3 if got else 1, 1 if got == "!" else 0, np.zeros((1, 3)))
 
-    return rollout
+    return drive
+
+
+def _mark(c: str) -> bool | str:
+    """✓: every goal reached; ✗: not; !: every goal reached with a wall hit."""
+    return "!" if c == "!" else c == "✓"
 
 
 def _checked(monkeypatch: pytest.MonkeyPatch, outcome: dict[str, str]) -> lesson_check.CheckedLesson:
-    """``outcome`` per table (``before``, ``whole``, ``where taken over``): ✓/✗ per start, the
-    check's three starts, then the correction's."""
+    """``outcome`` per table (``before``, ``whole``, ``where taken over``): ✓/✗/! per start
+    (:func:`_mark`), the check's three starts, then the correction's."""
     before = _before()
     whole = _reweighted(before, {"reach-blue", "reach-green/turn-left"}, 0.95)
     w = {"before": (70, 20), "whole": (95, 95), "where taken over": (70, 95)}
-    completes = {(w[k], float(x)): c == "✓" for k, marks in outcome.items() for x, c in enumerate(marks)}
-    monkeypatch.setattr(lesson_check, "rollout", _fake_rollout(completes))
+    completes = {(w[k], float(x)): _mark(c) for k, marks in outcome.items() for x, c in enumerate(marks)}
+    monkeypatch.setattr(lesson_check, "drive", _fake_rollout(completes))
     home = DemoWorld(None, Pose(0, 0, 0), np.zeros((2, 2)), 10.0, 3)  # type: ignore[arg-type]  # unused by the stand-in
     starts = [Pose(float(x), 0.0, 0.0) for x in range(3)]
     return checked_lesson(
@@ -182,6 +189,18 @@ def test_a_lesson_that_does_not_complete_the_corrections_start_is_not_taken(
     assert got.lesson == "where taken over"
 
 
+def test_a_wall_hit_is_no_completed_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    # the correction's start reached every goal but hit a wall: a lesson must drive it clean
+    got = _checked(monkeypatch, {"before": "✓✗✓!", "whole": "✓✓✓!", "where taken over": "✓✗✓✓"})
+    assert got.lesson == "where taken over"
+    # a check start the table before completed clean: a lesson that hits a wall there breaks it
+    got = _checked(monkeypatch, {"before": "✓✗✓!", "whole": "!✓✓✓", "where taken over": "✓✗!✓"})
+    assert got.lesson is None and "every lesson fails a check start" in got.why
+    # a check start the table before drove through with a hit: a lesson must still reach every goal
+    got = _checked(monkeypatch, {"before": "!✗✓!", "whole": "✗✓✓✓", "where taken over": "!✗✓✓"})
+    assert got.lesson == "where taken over" and "1 of 3 check starts complete (1 before)" in got.why
+
+
 #: the person-weighted tables' weights (reach-blue's, the turn's)
 WEIGHED = {"person": (85, 85), "even": (90, 90)}
 
@@ -195,15 +214,15 @@ def _laddered(
     before = _before()
     whole = _reweighted(before, {"reach-blue", "reach-green/turn-left"}, 0.95)
     w = {"before": (70, 20), "whole": (95, 95), "where taken over": (70, 95), **WEIGHED}
-    completes = {(w[k], float(x)): c == "✓" for k, marks in outcome.items() for x, c in enumerate(marks)}
+    completes = {(w[k], float(x)): _mark(c) for k, marks in outcome.items() for x, c in enumerate(marks)}
     stand_in = _fake_rollout(completes)
     driven = [0]
 
-    def counted(table: FusionTable, world: World, start: Pose, max_time_s: float) -> tuple[int, np.ndarray]:
+    def counted(table: FusionTable, world: World, start: Pose, max_time_s: float) -> Drive:
         driven[0] += 1
         return stand_in(table, world, start, max_time_s)
 
-    monkeypatch.setattr(lesson_check, "rollout", counted)
+    monkeypatch.setattr(lesson_check, "drive", counted)
     made: list[str] = []
 
     def weighed(weighing: str) -> FusionTable:
