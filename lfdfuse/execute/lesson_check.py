@@ -60,14 +60,41 @@ if TYPE_CHECKING:
 
 #: the lessons tried, largest first (see the module docstring)
 LESSONS = ("whole", "where taken over", "steps only")
-#: after the pooled lessons, the person-weighted tables' whole lessons, in order (see the module
-#: docstring)
-LADDER: tuple[Weighing, ...] = ("person", "even")
+
+
+@dataclass(frozen=True)
+class Reading:
+    """How the correction is read into a table again: its ticks' ``weighing`` in the goal steps
+    the person took over (:mod:`lfdfuse.estimate.pooled_rows`), and whether its turns are
+    decisions even where they read as ``corners``
+    (:func:`~lfdfuse.estimate.sub_step_corrections.decisions_of`)."""
+
+    weighing: Weighing = "pool"
+    corners: bool = False
+
+    @property
+    def name(self) -> str:
+        """The whole lesson of the table so read, as :attr:`CheckedLesson.lesson` names it."""
+        said = [WEIGHED[self.weighing]] if self.weighing != "pool" else []
+        if self.corners:
+            said.append(
+                "their turns read at corners too" if said else "the person's turns read at corners too"
+            )
+        return ", ".join(["whole", *said])
+
+
 #: how each weighing is named in the lesson taken
 WEIGHED: dict[Weighing, str] = {
     "even": "the person's ticks weighed even with the demo's",
     "person": "the person's ticks alone",
 }
+#: after the pooled lessons, the whole lessons of the correction read again so, in order (see
+#: the module docstring)
+LADDER: tuple[Reading, ...] = (
+    Reading("person"),
+    Reading("even"),
+    Reading("pool", corners=True),
+)
 
 
 @dataclass(frozen=True)
@@ -140,12 +167,12 @@ def checked_lesson(
     home: DemoWorld,
     starts: Sequence[Pose],
     corrections: Sequence[Pose],
-    weighed: Callable[[Weighing], FusionTable] | None = None,
+    reread: Callable[[Reading], FusionTable] | None = None,
 ) -> CheckedLesson:
-    """The first lesson (the largest pooled, then down :data:`LADDER`, the tables ``weighed``
-    makes: the correction's table with its ticks weighed so) that keeps what ``before`` completed
-    from ``starts`` in ``home`` and completes from the ``corrections``' starts (see the module
-    docstring)."""
+    """The first lesson (the largest pooled, then down :data:`LADDER`, the tables ``reread``
+    makes: the correction's table with the correction read so) that keeps what ``before``
+    completed from ``starts`` in ``home`` and completes from the ``corrections``' starts (see
+    the module docstring)."""
     tried = lessons(before, whole, taken_over)
     if not tried:
         return CheckedLesson(whole, "whole", "no row or step changed")
@@ -161,7 +188,7 @@ def checked_lesson(
 
     base = outcomes(before, starts)
     kept_starts = False
-    for name, table in _ladder(before, tried, weighed):
+    for name, table in _ladder(before, tried, reread):
         done = outcomes(table, everywhere)
         if not all(d[k] for d, b in zip(done, base, strict=False) for k in (0, 1) if b[k]):
             continue
@@ -180,21 +207,21 @@ def checked_lesson(
 def _ladder(
     before: FusionTable,
     pooled: list[tuple[str, FusionTable]],
-    weighed: Callable[[Weighing], FusionTable] | None,
+    reread: Callable[[Reading], FusionTable] | None,
 ) -> Iterator[tuple[str, FusionTable]]:
     """The lessons in the order tried: ``pooled``, then :data:`LADDER`'s whole lessons, each
-    table made when reached; a table tried before (the weighing moved no row of it) is not tried
-    again."""
+    table made when reached; a table tried before (the reading moved no row or step of it) is
+    not tried again."""
     yield from pooled
-    if weighed is None:
+    if reread is None:
         return
     seen = [before.network, *(t.network for _, t in pooled)]
-    for weighing in LADDER:
-        table = weighed(weighing)
+    for reading in LADDER:
+        table = reread(reading)
         if table.network in seen:
             continue
         seen.append(table.network)
-        yield f"whole, {WEIGHED[weighing]}", table
+        yield reading.name, table
 
 
 def _count(done: Sequence[bool], base: Sequence[bool]) -> str:
