@@ -218,7 +218,8 @@ def _learn_subgoals_pooled(
     """Sub-goals from several demos (:mod:`lfdfuse.estimate.pooled_subgoals`): the first demo
     learned (and checked) as alone, the others' decisions matched to its, their rows pooled; with
     a correction, the lesson checked in the demo's world (:mod:`lfdfuse.execute.lesson_check`: the
-    person-weighted tables estimated only if no pooled lesson is taken)."""
+    correction read again — its ticks weighing more, its turns read at corners too — estimated
+    only if no pooled lesson is taken; the verdicts and decisions are the table's taken)."""
     read = [read_segmented_and_run(d) for d in demos]
     runs = [run for run, _ in read]
     why = same_behaviors(runs, names)

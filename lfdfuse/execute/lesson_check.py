@@ -8,7 +8,7 @@ first sub-step, which the network never failed in. So a start that completed bef
 after.
 
 :func:`checked_lesson` drives the tables of three pooled lessons, largest first (then those of
-the person-weighted tables, below), from the demo's check starts (:meth:`~lfdfuse.execute.check.DemoWorld.starts`) and from each correction's own start
+the correction read again, below), from the demo's check starts (:meth:`~lfdfuse.execute.check.DemoWorld.starts`) and from each correction's own start
 (in the demo's world):
 
 ``whole``
@@ -22,19 +22,31 @@ the person-weighted tables, below), from the demo's check starts (:meth:`~lfdfus
 
 Pooled, a row weighs the demo's many steps against the person's few ticks (a row with a thousand
 demo steps barely moves for 160 person ticks), so a correction can be taken and change little.
-Where no pooled lesson does, the whole lessons of the person-weighted tables follow, largest
-first (:data:`LADDER`, each table made only when reached; :mod:`lfdfuse.estimate.pooled_rows`):
-in the goal steps the person took over, the rows the person drove with
+Where no pooled lesson does, the whole lessons of the correction read again follow, in order
+(:data:`LADDER`, each :class:`Reading`'s table made only when reached, not driven again where
+it equals one tried): in the goal steps the person took over, the rows the person drove with
+(:mod:`lfdfuse.estimate.pooled_rows`)
 
 ``person``
     the person's ticks alone,
 ``even``
-    the person's ticks weighed even with the demo's (its steps thinned evenly to as many).
+    the person's ticks weighed even with the demo's (its steps thinned evenly to as many);
 
-On 91 failing worlds of the ``corrections`` bench (seeds 2065-2724) they fixed 13 more (69, the
-pooled lessons alone 56); their ``where taken over`` lessons, tried after each whole one, were
-never the first to pass, so are not tried (``steps only`` is the pooled one's: the weighing moves
-no step); the person's ticks alone first fixed one world more than even first.
+then the correction pooled with its turns read as decisions even where they read as corners
+(``corners``, :func:`~lfdfuse.estimate.sub_step_corrections.decisions_of`): a spur a few metres
+past a ring's corner reads as one in the correction (the sectors, held at the heading from
+before the corner, see its far wall ahead), so the person's turn into it re-weighted rows only
+and the robot drove past it again. Read so by default, a corner the person cut becomes a
+decision nobody needed (it broke worlds an earlier lesson fixes); last, it is tried only where
+nothing else is taken.
+
+On 91 failing worlds of the ``corrections`` bench (seeds 2065-2724) the person-weighted lessons
+fixed 13 more (69, the pooled lessons alone 56); their ``where taken over`` lessons, tried after
+each whole one, were never the first to pass, so are not tried (``steps only`` is the pooled
+one's: the weighing moves no step); the person's ticks alone first fixed one world more than
+even first. The turns read at corners, on the 21 of them where no lesson was taken, fixed 3
+more (2199, 2541, 2575), no start failing after that completed before; with the person's ticks
+alone as well, it was never the first to pass: not tried.
 
 It takes the first lesson that completes every check start the table before completed and the
 corrections' starts; else none (the table before). A lesson that does not carry the robot
