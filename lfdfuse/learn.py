@@ -23,12 +23,11 @@ from pathlib import Path
 from lfdfuse.errors import ConfigError
 from lfdfuse.estimate.demo_alignment import same_behaviors
 from lfdfuse.estimate.pipeline import EstimateOptions, estimate_run, estimate_runs
-from lfdfuse.estimate.pooled_rows import Weighing
 from lfdfuse.estimate.pooled_subgoals import PooledSubgoals, Verdict, pool_subgoals
 from lfdfuse.estimate.sub_step_corrections import FurtherDemo, taken_over
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.check import CHECK_STARTS, DemoWorld, demo_world
-from lfdfuse.execute.lesson_check import CheckedLesson, checked_lesson
+from lfdfuse.execute.lesson_check import CheckedLesson, Reading, checked_lesson
 from lfdfuse.execute.repair import Amends, Repair, repair
 from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.log.reader import Run
@@ -219,7 +218,8 @@ def _learn_subgoals_pooled(
     """Sub-goals from several demos (:mod:`lfdfuse.estimate.pooled_subgoals`): the first demo
     learned (and checked) as alone, the others' decisions matched to its, their rows pooled; with
     a correction, the lesson checked in the demo's world (:mod:`lfdfuse.execute.lesson_check`: the
-    person-weighted tables estimated only if no pooled lesson is taken)."""
+    correction read again — its ticks weighing more, its turns read at corners too — estimated
+    only if no pooled lesson is taken; the verdicts and decisions are the table's taken)."""
     read = [read_segmented_and_run(d) for d in demos]
     runs = [run for run, _ in read]
     why = same_behaviors(runs, names)
@@ -248,7 +248,7 @@ def _learn_subgoals_pooled(
         for name, src, (r, w) in zip(names[1:], demos[1:], read[1:], strict=True)
     ]
 
-    def pooled(weighing: Weighing = "pool") -> PooledSubgoals:
+    def pooled(reading: Reading = Reading()) -> PooledSubgoals:
         return pool_subgoals(
             first=run,
             first_name=names[0],
@@ -258,11 +258,18 @@ def _learn_subgoals_pooled(
             others=others,
             opts=options.estimate,
             params=options.decisions,
-            weighing=weighing,
+            weighing=reading.weighing,
+            corners=reading.corners,
         )
 
     res = pooled()
     built, checked = res.table, None
+    made: list[PooledSubgoals] = []  # the tables of the correction read again, as made
+
+    def reread(reading: Reading) -> FusionTable:
+        made.append(pooled(reading))
+        return made[-1].table
+
     if home is not None and options.check_starts is not None and any(o.correction for o in others):
         checked = checked_lesson(
             table,
@@ -275,9 +282,11 @@ def _learn_subgoals_pooled(
                 for o, (_, w) in zip(others, read[1:], strict=True)
                 if o.correction and w.pose is not None and len(w.pose) and w.world_yaml == raw.world_yaml
             ],
-            weighed=lambda weighing: pooled(weighing).table,
+            reread=reread,
         )
         built = checked.table
+        # a table read again taken: its verdicts (with the turns read at corners, its decisions)
+        res = next((m for m in made if m.table is built), res)
     tell(progress, 1.0, 1.0)
     return LearnResult(built, groups, skipped, res.decisions, tuple(names), fixed, res.verdicts, checked)
 

@@ -37,6 +37,11 @@ person's correction (a ``teleop --table`` log: only the person's ticks are infor
   (a row's worth of ticks or more) can instead weigh the person's ticks ``even`` with the demo's
   (its steps thinned evenly to as many) or take the ``person``'s alone; ``pool`` (the default)
   is the product over every step, as above.
+* **A correction's turns at corners** (``corners``): a teacher's turn where the way ahead and the
+  other side are closed is a corner, no decision; read so, a person's turn into a spur just past
+  a corner (its far wall seen ahead) is one too, and only re-weights rows. With ``corners`` a
+  correction's turns are decisions there as well (:func:`~lfdfuse.estimate.sub_step_corrections.decisions_of`);
+  off by default: a corner the person cut then reads as a decision nobody needed.
 """
 
 from __future__ import annotations
@@ -134,11 +139,13 @@ def pool_subgoals(
     opts: EstimateOptions,
     params: DecisionParams = DecisionParams(),
     weighing: Weighing = "pool",
+    corners: bool = False,
 ) -> PooledSubgoals:
     """``table`` (the first demo's with sub-goals, ``decisions`` its decision points; ``paper``
     the first demo's table without) with the further demos' decisions matched, added or dropped
     and the rows they drive in pooled, the corrections' ticks weighed by ``weighing`` in the goal
-    steps their persons took over (see the module docstring)."""
+    steps their persons took over, their turns read as decisions even at corners with
+    ``corners`` (see the module docstring)."""
     if weighing not in WEIGHINGS:
         raise ConfigError(f"weighing {weighing!r}: one of {', '.join(WEIGHINGS)}")
     over = taken_over(others) if weighing != "pool" else set()
@@ -170,7 +177,7 @@ def pool_subgoals(
     labelled: dict[int, set[int]] = {}  # goal step -> corrections whose ticks go by the network's sub-step
     inserted: dict[int, list[Inserted]] = {}  # goal step -> corrections' decisions inside its sub-steps
     for e, demo in enumerate(others, start=1):
-        found = decisions_of(demo, paper, al.step_of[e], params)
+        found = decisions_of(demo, paper, al.step_of[e], params, corners=corners)
         for j in goal_steps:
             mine = [d for d in found if al.step_of[e][d.segment] == j]
             segs = [s for s, k in zip(demo.run.segments, al.step_of[e], strict=True) if k == j]
@@ -198,7 +205,9 @@ def pool_subgoals(
                     # the network's sub-step is known: a turn-off of the person's is a decision
                     # of the sub-step the network was in, the other ticks re-weight theirs
                     got = [
-                        inside_decision(demo, e, b, step, segs[0], paper, al.step_of[e], params)
+                        inside_decision(
+                            demo, e, b, step, segs[0], paper, al.step_of[e], params, corners=corners
+                        )
                         for b in unmatched
                     ]
                     if all(g is not None for g in got):

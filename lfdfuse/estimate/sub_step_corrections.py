@@ -143,10 +143,21 @@ def decisions_of(
     step_of: Sequence[int],
     params: DecisionParams,
     segments: tuple[GoalSegment, ...] | None = None,
+    *,
+    corners: bool = False,
 ) -> list[DecisionPoint]:
     """Decision points of a further demo, the first demo's paper table replayed on its steps
     (``segments``: of these spans of its goal segments instead), each opening counted at its
-    first onset (:attr:`DecisionParams.first_onset`)."""
+    first onset (:attr:`DecisionParams.first_onset`).
+
+    ``corners``: a correction's turns are decisions even where they read as corners (the way
+    ahead and the other side closed at the opening's onset: :attr:`DecisionParams.skip_corners`
+    off). A teacher who turned there had no other way; a person who took over had: their
+    network drove on. A spur a few metres past a corner reads so (the sectors, held at the
+    heading from before the corner, see its far wall ahead), and read as a corner the person's
+    turn into it re-weights rows only. But a corner the person cut reads as a turn-off too (a
+    decision added where there was no choice), so it is off unless asked for (the lesson
+    ladder's last rung, :mod:`lfdfuse.execute.lesson_check`)."""
     run = demo.run
     mapped = replace(run, segment_of=np.asarray(step_of, dtype=np.int64)[run.segment_of])
     fused = fused_vectors(paper, mapped, np.arange(len(run.t_ns)))
@@ -157,7 +168,12 @@ def decisions_of(
         informative=run.informative,
         fused=fused,
         track=demo.track,
-        params=replace(params, first_onset=True, shape_steps=shape),
+        params=replace(
+            params,
+            first_onset=True,
+            shape_steps=shape,
+            skip_corners=params.skip_corners and not (corners and demo.correction),
+        ),
     )
 
 
@@ -189,16 +205,21 @@ def inside_decision(
     paper: FusionTable,
     step_of: Sequence[int],
     params: DecisionParams,
+    *,
+    corners: bool = False,
 ) -> Inserted | None:
     """Correction ``demo``'s decision ``b`` as a decision of the sub-step its network was in when
     the turn began, its landmark counted from where the network entered that sub-step (found
-    again from there); None when the network's step there is not one of ``step``'s."""
+    again from there, read as ``b`` was: ``corners``, :func:`decisions_of`); None when the
+    network's step there is not one of ``step``'s."""
     at = b.begin if b.begin >= 0 else b.onset
     leaf = _leaf_at(demo, step.name, at)
     if leaf is None or step.network is None or leaf not in {s.name for s in step.network.steps}:
         return None
     since = _leaf_since(demo, step.name, leaf, at, seg.start)
-    again = decisions_of(demo, paper, step_of, params, (GoalSegment(seg.index, since, seg.stop, seg.goal),))
+    again = decisions_of(
+        demo, paper, step_of, params, (GoalSegment(seg.index, since, seg.stop, seg.goal),), corners=corners
+    )
     mine = next((d for d in again if d.side == b.side and abs(d.onset - b.onset) <= params.lookback), None)
     return None if mine is None else Inserted(leaf, mine, e)
 

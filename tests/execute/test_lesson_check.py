@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 from lfdfuse.execute import lesson_check
 from lfdfuse.execute.check import DemoWorld, Drive
-from lfdfuse.execute.lesson_check import checked_lesson, lessons
+from lfdfuse.execute.lesson_check import Reading, checked_lesson, lessons
 from lfdfuse.network.landmark_goals import Landmark
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step, named_leaf_steps
 from lfdfuse.robot.pose import Pose
@@ -201,20 +201,30 @@ def test_a_wall_hit_is_no_completed_run(monkeypatch: pytest.MonkeyPatch) -> None
     assert got.lesson == "where taken over" and "1 of 3 check starts complete (1 before)" in got.why
 
 
-#: the person-weighted tables' weights (reach-blue's, the turn's)
-WEIGHED = {"person": (85, 85), "even": (90, 90)}
+#: each reading of :data:`~lfdfuse.execute.lesson_check.LADDER` a table of its own: its rows'
+#: weights (reach-blue's, the turn's), in hundredths
+READ = {r: (80 + k, 80 + k) for k, r in enumerate(lesson_check.LADDER)}
+PERSON, EVEN, CORNERS = Reading("person"), Reading("even"), Reading("pool", corners=True)
 
 
 def _laddered(
-    monkeypatch: pytest.MonkeyPatch, outcome: dict[str, str], *, moved: bool = True
-) -> tuple[lesson_check.CheckedLesson, list[str], int]:
-    """As :func:`_checked`, with the person-weighted tables too (``outcome`` keys ``person`` and
-    ``even``); also which weighings were made, in order, and how many rollouts were driven.
-    ``moved``: whether weighing moves any row (else the weighed table is the pooled one)."""
+    monkeypatch: pytest.MonkeyPatch,
+    outcome: dict[str, str],
+    read: dict[Reading, str] | None = None,
+    *,
+    same: dict[Reading, Reading | None] | None = None,
+) -> tuple[lesson_check.CheckedLesson, list[Reading], int]:
+    """As :func:`_checked`, with the tables of the correction read again too (``read``: ✓/✗/!
+    per start for the tables of :data:`~lfdfuse.execute.lesson_check.LADDER`'s readings, every
+    start failing where not given); also which readings were made, in order, and how many
+    rollouts were driven. ``same``: a reading whose table is another's (None: the pooled whole
+    one), as when the reading moves no row or step."""
     before = _before()
     whole = _reweighted(before, {"reach-blue", "reach-green/turn-left"}, 0.95)
-    w = {"before": (70, 20), "whole": (95, 95), "where taken over": (70, 95), **WEIGHED}
+    w = {"before": (70, 20), "whole": (95, 95), "where taken over": (70, 95)}
     completes = {(w[k], float(x)): _mark(c) for k, marks in outcome.items() for x, c in enumerate(marks)}
+    for r, weights in READ.items():
+        completes |= {(weights, float(x)): _mark(c) for x, c in enumerate((read or {}).get(r, "✗✗✗✗"))}
     stand_in = _fake_rollout(completes)
     driven = [0]
 
@@ -223,13 +233,16 @@ def _laddered(
         return stand_in(table, world, start, max_time_s)
 
     monkeypatch.setattr(lesson_check, "drive", counted)
-    made: list[str] = []
+    made: list[Reading] = []
 
-    def weighed(weighing: str) -> FusionTable:
-        made.append(weighing)
-        if not moved:
-            return whole
-        return _reweighted(before, {"reach-blue", "reach-green/turn-left"}, WEIGHED[weighing][0] / 100)
+    def reread(reading: Reading) -> FusionTable:
+        made.append(reading)
+        if same is not None and reading in same:
+            other = same[reading]
+            if other is None:
+                return whole
+            reading = other
+        return _reweighted(before, {"reach-blue", "reach-green/turn-left"}, READ[reading][0] / 100)
 
     home = DemoWorld(None, Pose(0, 0, 0), np.zeros((2, 2)), 10.0, 3)  # type: ignore[arg-type]  # unused by the stand-in
     starts = [Pose(float(x), 0.0, 0.0) for x in range(3)]
@@ -240,60 +253,69 @@ def _laddered(
         home=home,
         starts=starts,
         corrections=[Pose(3.0, 0, 0)],
-        weighed=weighed,  # type: ignore[arg-type]
+        reread=reread,
     )
     return got, made, driven[0]
 
 
 #: neither pooled lesson completes the correction's start (the whole one keeps every check start)
 POOLED_FAIL = {"before": "✓✗✓✗", "whole": "✓✓✓✗", "where taken over": "✓✗✓✗"}
+OK, FAILS_START, MISSES_CORR = "✓✗✓✓", "✗✗✓✓", "✓✗✓✗"
 
 
-def test_the_person_weighted_tables_are_made_only_when_no_pooled_lesson_is_taken(
+def test_the_tables_read_again_are_made_only_when_no_pooled_lesson_is_taken(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    got, made, _ = _laddered(monkeypatch, {"before": "✓✗✓✗", "whole": "✓✓✓✓", "where taken over": "✓✓✓✓"})
+    every = dict.fromkeys(READ, OK)
+    got, made, _ = _laddered(
+        monkeypatch, {"before": "✓✗✓✗", "whole": "✓✓✓✓", "where taken over": "✓✓✓✓"}, every
+    )
     assert got.lesson == "whole" and made == []
-    got, made, _ = _laddered(monkeypatch, {"before": "✓✗✓✗", "whole": "✗✓✓✓", "where taken over": "✓✗✓✓"})
+    got, made, _ = _laddered(
+        monkeypatch, {"before": "✓✗✓✗", "whole": "✗✓✓✓", "where taken over": "✓✗✓✓"}, every
+    )
     assert got.lesson == "where taken over" and made == []
 
 
-def test_the_ladder_tries_the_persons_ticks_alone_then_even_with_the_demos(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    ok, fails_start, misses_corr = "✓✗✓✓", "✗✗✓✓", "✓✗✓✗"
-    alone = "whole, the person's ticks alone"
-    even = "whole, the person's ticks weighed even with the demo's"
-    for person, then, lesson, made_ in [
-        (ok, ok, alone, ["person"]),
-        (ok, fails_start, alone, ["person"]),
-        (fails_start, ok, even, ["person", "even"]),
-        (misses_corr, ok, even, ["person", "even"]),
-    ]:
-        got, made, _ = _laddered(monkeypatch, POOLED_FAIL | {"person": person, "even": then})
-        assert got.lesson == lesson and made == made_, (person, then, got)
-        assert got.table != _before() and "the correction's start completes" in got.why
-        assert got.describe().startswith(f"lesson checked in the demo's world: {lesson}: ")
-    for person, then in [(misses_corr, misses_corr), (fails_start, misses_corr)]:
-        got, made, _ = _laddered(monkeypatch, POOLED_FAIL | {"person": person, "even": then})
-        assert got.lesson is None and got.table == _before() and made == ["person", "even"]
-        assert "no lesson completes the correction's start" in got.why
+def test_the_ladder_tries_the_persons_ticks_alone_then_even_then_the_turns_read_at_corners() -> None:
+    assert lesson_check.LADDER[:3] == (PERSON, EVEN, CORNERS)
+    assert [r.name for r in lesson_check.LADDER[:3]] == [
+        "whole, the person's ticks alone",
+        "whole, the person's ticks weighed even with the demo's",
+        "whole, the person's turns read at corners too",
+    ]
+    assert len({r.name for r in lesson_check.LADDER}) == len(lesson_check.LADDER)
+
+
+def test_each_rung_is_taken_only_where_every_rung_before_it_is_not(monkeypatch: pytest.MonkeyPatch) -> None:
+    ladder = lesson_check.LADDER
+    for k, taken in enumerate(ladder):
+        for miss in (FAILS_START, MISSES_CORR):
+            # every rung before fails (a check start or the correction's), this one and those after pass
+            read = {r: miss if n < k else OK for n, r in enumerate(ladder)}
+            got, made, _ = _laddered(monkeypatch, POOLED_FAIL, read)
+            assert got.lesson == taken.name and made == list(ladder[: k + 1]), (taken, miss, got)
+            assert got.table != _before() and "the correction's start completes" in got.why
+            assert got.describe().startswith(f"lesson checked in the demo's world: {taken.name}: ")
+    got, made, _ = _laddered(monkeypatch, POOLED_FAIL, dict.fromkeys(ladder, MISSES_CORR))
+    assert got.lesson is None and got.table == _before() and made == list(ladder)
+    assert "no lesson completes the correction's start" in got.why
     # the same acceptance rule as the pooled lessons: none keeps every check start
     got, _, _ = _laddered(
         monkeypatch,
-        {
-            "before": "✓✗✓✗",
-            "whole": "✗✓✓✓",
-            "where taken over": "✗✗✓✓",
-            "person": fails_start,
-            "even": fails_start,
-        },
+        {"before": "✓✗✓✗", "whole": "✗✓✓✓", "where taken over": "✗✗✓✓"},
+        dict.fromkeys(ladder, FAILS_START),
     )
     assert got.lesson is None and "every lesson fails a check start" in got.why
 
 
-def test_a_weighing_that_moves_no_row_is_not_driven_again(monkeypatch: pytest.MonkeyPatch) -> None:
-    _, made, driven = _laddered(monkeypatch, POOLED_FAIL, moved=False)
-    assert made == ["person", "even"]
+def test_a_reading_that_moves_no_row_or_step_is_not_driven_again(monkeypatch: pytest.MonkeyPatch) -> None:
+    ladder = lesson_check.LADDER
+    _, made, driven = _laddered(monkeypatch, POOLED_FAIL, same=dict.fromkeys(ladder))
+    assert made == list(ladder)
     # the table before from the check starts, each pooled lesson from every start; nothing more
     assert driven == 3 + 2 * 4
+    # the turns read at corners add no decision: its table is the person-weighted one, tried before
+    _, made, driven = _laddered(monkeypatch, POOLED_FAIL, same={CORNERS: PERSON})
+    assert made == list(ladder)
+    assert driven == 3 + 2 * 4 + 4 * (len(ladder) - 1)

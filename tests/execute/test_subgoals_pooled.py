@@ -391,3 +391,41 @@ def test_a_corrections_turn_off_inside_a_sub_step_becomes_a_decision_of_that_sub
         assert after[n].landmark == s.landmark, n
         if not n.startswith("reach-green/reach-green"):
             assert after[n] == s, n
+
+
+def test_a_corrections_turns_at_corners_are_decisions_only_when_asked(
+    read: Read, refined: LearnResult
+) -> None:
+    """The demo read as a correction of its own paper table, as in the test above: by default
+    (``corners`` off) a turn into a corner is none of the added decisions, bit for bit the table
+    of a call without the option; with ``corners`` every turn the default adds is added still,
+    and the teacher's corners too (the way ahead and the other side closed: there was no other
+    way, but a person who took over had — their network drove on). A teacher's demo pooled is
+    read as before either way: the option reads corrections only."""
+    from lfdfuse.estimate.pooled_subgoals import pool_subgoals
+    from lfdfuse.estimate.sub_step_corrections import FurtherDemo
+
+    run, track, paper = read.run, read.track, read.paper
+
+    def pooled(correction: bool, **corners: bool) -> tuple[FusionTable, list[tuple[str, DecisionPoint]]]:
+        res = pool_subgoals(
+            first=run,
+            first_name="demo",
+            paper=paper,
+            table=paper,
+            decisions=(),
+            others=[FurtherDemo("fix", run, track, correction=correction)],
+            opts=OPTS,
+            **corners,
+        )
+        return res.table, [(v.kind, v.decision) for v in res.verdicts]
+
+    plain = pooled(True)
+    assert pooled(True, corners=False) == plain
+    assert [k for k, _ in plain[1]] == ["added"] * len(refined.decisions)
+    table, verdicts = pooled(True, corners=True)
+    assert {k for k, _ in verdicts} == {"added"} and len(verdicts) > len(plain[1])
+    got = {(d.segment, d.side, d.onset) for _, d in verdicts}
+    assert {(d.segment, d.side, d.onset) for _, d in plain[1]} <= got
+    assert table != plain[0]
+    assert pooled(False, corners=True) == pooled(False)
