@@ -40,13 +40,11 @@ and the robot drove past it again. Read so by default, a corner the person cut b
 decision nobody needed (it broke worlds an earlier lesson fixes); last, it is tried only where
 nothing else is taken.
 
-On 91 failing worlds of the ``corrections`` bench (seeds 2065-2724) the person-weighted lessons
-fixed 13 more (69, the pooled lessons alone 56); their ``where taken over`` lessons, tried after
-each whole one, were never the first to pass, so are not tried (``steps only`` is the pooled
-one's: the weighing moves no step); the person's ticks alone first fixed one world more than
-even first. The turns read at corners, on the 21 of them where no lesson was taken, fixed 3
-more (2199, 2541, 2575: 76 of the 91, 73 without), no start failing after that completed
-before; with the person's ticks alone as well, it was never the first to pass: not tried.
+The order is measured on the ``corrections`` bench's failing tuning worlds (91): the
+person-weighted lessons fixed 13 that no pooled lesson fixed (the person's ticks alone first, one
+more than even first), the turns read at corners 3 more; the weighted tables' ``where taken
+over`` lessons and the corners reading with the person's ticks alone were never the first to
+pass, so are not tried (``steps only`` is the pooled one's: a weighing moves no step).
 
 It takes the first lesson that completes every check start the table before completed and the
 corrections' starts; else none (the table before). A lesson that does not carry the robot
