@@ -27,7 +27,7 @@ from lfdfuse.estimate.pooled_subgoals import PooledSubgoals, Verdict, pool_subgo
 from lfdfuse.estimate.sub_step_corrections import FurtherDemo, taken_over
 from lfdfuse.estimate.subgoals import refine, track_of
 from lfdfuse.execute.check import CHECK_STARTS, DemoWorld, demo_world
-from lfdfuse.execute.lesson_check import CheckedLesson, Reading, checked_lesson
+from lfdfuse.execute.lesson_check import CheckedLesson, Rereading, checked_lesson
 from lfdfuse.execute.repair import Amends, Repair, repair
 from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.log.reader import Run
@@ -248,7 +248,7 @@ def _learn_subgoals_pooled(
         for name, src, (r, w) in zip(names[1:], demos[1:], read[1:], strict=True)
     ]
 
-    def pooled(reading: Reading = Reading()) -> PooledSubgoals:
+    def pooled(reading: Rereading = Rereading()) -> PooledSubgoals:
         return pool_subgoals(
             first=run,
             first_name=names[0],
@@ -266,7 +266,7 @@ def _learn_subgoals_pooled(
     built, checked = res.table, None
     made: list[PooledSubgoals] = []  # the tables of the correction read again, as made
 
-    def reread(reading: Reading) -> FusionTable:
+    def reread(reading: Rereading) -> FusionTable:
         made.append(pooled(reading))
         return made[-1].table
 

@@ -23,7 +23,7 @@ the correction read again, below), from the demo's check starts (:meth:`~lfdfuse
 Pooled, a row weighs the demo's many steps against the person's few ticks (a row with a thousand
 demo steps barely moves for 160 person ticks), so a correction can be taken and change little.
 Where no pooled lesson does, the whole lessons of the correction read again follow, in order
-(:data:`LADDER`, each :class:`Reading`'s table made only when reached, not driven again where
+(:data:`LADDER`, each :class:`Rereading`'s table made only when reached, not driven again where
 it equals one tried): in the goal steps the person took over, the rows the person drove with
 (:mod:`lfdfuse.estimate.pooled_rows`)
 
@@ -73,7 +73,7 @@ LESSONS = ("whole", "where taken over", "steps only")
 
 
 @dataclass(frozen=True)
-class Reading:
+class Rereading:
     """How the correction is read into a table again: its ticks' ``weighing`` in the goal steps
     the person took over (:mod:`lfdfuse.estimate.pooled_rows`), and whether its turns are
     decisions even where they read as ``corners``
@@ -100,10 +100,10 @@ WEIGHED: dict[Weighing, str] = {
 }
 #: after the pooled lessons, the whole lessons of the correction read again so, in order (see
 #: the module docstring)
-LADDER: tuple[Reading, ...] = (
-    Reading("person"),
-    Reading("even"),
-    Reading("pool", corners=True),
+LADDER: tuple[Rereading, ...] = (
+    Rereading("person"),
+    Rereading("even"),
+    Rereading("pool", corners=True),
 )
 
 
@@ -177,7 +177,7 @@ def checked_lesson(
     home: DemoWorld,
     starts: Sequence[Pose],
     corrections: Sequence[Pose],
-    reread: Callable[[Reading], FusionTable] | None = None,
+    reread: Callable[[Rereading], FusionTable] | None = None,
 ) -> CheckedLesson:
     """The first lesson (the largest pooled, then down :data:`LADDER`, the tables ``reread``
     makes: the correction's table with the correction read so) that keeps what ``before``
@@ -217,7 +217,7 @@ def checked_lesson(
 def _ladder(
     before: FusionTable,
     pooled: list[tuple[str, FusionTable]],
-    reread: Callable[[Reading], FusionTable] | None,
+    reread: Callable[[Rereading], FusionTable] | None,
 ) -> Iterator[tuple[str, FusionTable]]:
     """The lessons in the order tried: ``pooled``, then :data:`LADDER`'s whole lessons, each
     table made when reached; a table tried before (the reading moved no row or step of it) is

@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 from lfdfuse.execute import lesson_check
 from lfdfuse.execute.check import DemoWorld, Drive
-from lfdfuse.execute.lesson_check import Reading, checked_lesson, lessons
+from lfdfuse.execute.lesson_check import Rereading, checked_lesson, lessons
 from lfdfuse.network.landmark_goals import Landmark
 from lfdfuse.network.table import FusionRow, FusionTable, Network, Step, named_leaf_steps
 from lfdfuse.robot.pose import Pose
@@ -204,16 +204,16 @@ def test_a_wall_hit_is_no_completed_run(monkeypatch: pytest.MonkeyPatch) -> None
 #: each reading of :data:`~lfdfuse.execute.lesson_check.LADDER` a table of its own: its rows'
 #: weights (reach-blue's, the turn's), in hundredths
 READ = {r: (80 + k, 80 + k) for k, r in enumerate(lesson_check.LADDER)}
-PERSON, EVEN, CORNERS = Reading("person"), Reading("even"), Reading("pool", corners=True)
+PERSON, EVEN, CORNERS = Rereading("person"), Rereading("even"), Rereading("pool", corners=True)
 
 
 def _laddered(
     monkeypatch: pytest.MonkeyPatch,
     outcome: dict[str, str],
-    read: dict[Reading, str] | None = None,
+    read: dict[Rereading, str] | None = None,
     *,
-    same: dict[Reading, Reading | None] | None = None,
-) -> tuple[lesson_check.CheckedLesson, list[Reading], int]:
+    same: dict[Rereading, Rereading | None] | None = None,
+) -> tuple[lesson_check.CheckedLesson, list[Rereading], int]:
     """As :func:`_checked`, with the tables of the correction read again too (``read``: ✓/✗/!
     per start for the tables of :data:`~lfdfuse.execute.lesson_check.LADDER`'s readings, every
     start failing where not given); also which readings were made, in order, and how many
@@ -233,9 +233,9 @@ def _laddered(
         return stand_in(table, world, start, max_time_s)
 
     monkeypatch.setattr(lesson_check, "drive", counted)
-    made: list[Reading] = []
+    made: list[Rereading] = []
 
-    def reread(reading: Reading) -> FusionTable:
+    def reread(reading: Rereading) -> FusionTable:
         made.append(reading)
         if same is not None and reading in same:
             other = same[reading]
