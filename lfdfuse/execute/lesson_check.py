@@ -59,14 +59,11 @@ from __future__ import annotations
 
 from collections.abc import Callable, Collection, Iterator, Sequence
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
 
+from lfdfuse.estimate.pooled_rows import Weighing
 from lfdfuse.execute.check import DemoWorld, drive
 from lfdfuse.network.table import FusionTable, Network, Step
 from lfdfuse.robot.pose import Pose
-
-if TYPE_CHECKING:
-    from lfdfuse.estimate.pooled_rows import Weighing
 
 #: the lessons tried, largest first (see the module docstring)
 LESSONS = ("whole", "where taken over", "steps only")

@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -18,7 +19,9 @@ import pytest
 from lfdfuse import learn as learning
 from lfdfuse.estimate.paper import PFParams
 from lfdfuse.estimate.pipeline import EstimateOptions
+from lfdfuse.estimate.pooled_subgoals import PooledSubgoals, pool_subgoals
 from lfdfuse.estimate.smc import SMCParams
+from lfdfuse.estimate.sub_step_corrections import FurtherDemo
 from lfdfuse.learn import LearnOptions, LearnResult, learn
 from lfdfuse.network.table import FusionTable, named_leaf_steps
 from lfdfuse.segment.decisions import DecisionPoint
@@ -46,6 +49,29 @@ class Read:
     run: SegmentedRun
     track: LandmarkTrack
     paper: FusionTable
+
+    def pool(
+        self,
+        table: FusionTable,
+        decisions: Sequence[DecisionPoint],
+        fix: SegmentedRun,
+        *,
+        correction: bool = True,
+        steps: tuple[str, ...] | None = None,
+        **how: Any,
+    ) -> PooledSubgoals:
+        """``table`` (the demo's, ``decisions`` its decision points) pooled with ``fix``, a
+        further demo in the demo's world (a correction unless said)."""
+        return pool_subgoals(
+            first=self.run,
+            first_name="demo",
+            paper=self.paper,
+            table=table,
+            decisions=decisions,
+            others=[FurtherDemo("fix", fix, self.track, correction=correction, steps=steps)],
+            opts=OPTS,
+            **how,
+        )
 
 
 @pytest.fixture(scope="module")
@@ -84,19 +110,8 @@ def test_a_corrections_turn_off_becomes_a_decision_of_a_table_without_one(
     sub-goal refinement finds in it is added to its goal step — drive on with the step's own
     rows, turn with the demo's turn alone, then the step's own rows again — each landmark as
     the refinement writes it."""
-    from lfdfuse.estimate.pooled_subgoals import pool_subgoals
-    from lfdfuse.estimate.sub_step_corrections import FurtherDemo
-
-    run, track, paper = read.run, read.track, read.paper
-    res = pool_subgoals(
-        first=run,
-        first_name="demo",
-        paper=paper,
-        table=paper,
-        decisions=(),
-        others=[FurtherDemo("fix", run, track, correction=True)],
-        opts=OPTS,
-    )
+    run, paper = read.run, read.paper
+    res = read.pool(paper, (), run)
     assert [(v.kind, v.decision) for v in res.verdicts] == [("added", d) for d in refined.decisions]
     assert res.decisions == ()  # none of the first demo's own
     marks = [(n, s.landmark) for n, s in named_leaf_steps(res.table)]
@@ -197,10 +212,7 @@ def test_a_correction_in_a_sub_step_re_weights_that_sub_step_alone(read: Read, r
     sub-step's rows; every other row of every step stays bit for bit, the sub-goals too. Not
     known (a log segmented without it), the correction took none of the step's decisions and
     teaches nothing."""
-    from lfdfuse.estimate.pooled_subgoals import pool_subgoals
-    from lfdfuse.estimate.sub_step_corrections import FurtherDemo
-
-    run, track, paper = read.run, read.track, read.paper
+    run = read.run
     table = refined.table
     (d,) = [d for d in refined.decisions if table.network.steps[d.segment].name == "reach-green"]
     seg = run.segments[d.segment]
@@ -211,15 +223,7 @@ def test_a_correction_in_a_sub_step_re_weights_that_sub_step_alone(read: Read, r
     assert {steps[i] for i in np.flatnonzero(person)} == {"reach-green/reach-green"}
 
     def pooled(known: bool) -> FusionTable:
-        return pool_subgoals(
-            first=run,
-            first_name="demo",
-            paper=paper,
-            table=table,
-            decisions=refined.decisions,
-            others=[FurtherDemo("fix", fix, track, correction=True, steps=steps if known else None)],
-            opts=OPTS,
-        ).table
+        return read.pool(table, refined.decisions, fix, steps=steps if known else None).table
 
     assert pooled(False).network == table.network
     a, b = named_leaf_steps(table), named_leaf_steps(pooled(True))
@@ -249,10 +253,7 @@ def test_the_persons_weight_moves_only_rows_they_drove_enough_in_where_they_took
     ``person`` change only rows the person drove ``min_samples`` ticks or more in, there estimated
     on as many demo steps as person ticks (fewer where the demo has fewer) or on the person's
     alone; every other row, step and landmark is the pooled table's, bit for bit."""
-    from lfdfuse.estimate.pooled_subgoals import pool_subgoals
-    from lfdfuse.estimate.sub_step_corrections import FurtherDemo
-
-    run, track, paper = read.run, read.track, read.paper
+    run = read.run
     table = refined.table
     (d,) = [d for d in refined.decisions if table.network.steps[d.segment].name == "reach-green"]
     seg = run.segments[d.segment]
@@ -262,16 +263,7 @@ def test_the_persons_weight_moves_only_rows_they_drove_enough_in_where_they_took
     steps = _labels(run, table, refined.decisions)
 
     def pooled(**weighing: str) -> FusionTable:
-        return pool_subgoals(
-            first=run,
-            first_name="demo",
-            paper=paper,
-            table=table,
-            decisions=refined.decisions,
-            others=[FurtherDemo("fix", fix, track, correction=True, steps=steps)],
-            opts=OPTS,
-            **weighing,  # type: ignore[arg-type]
-        ).table
+        return read.pool(table, refined.decisions, fix, steps=steps, **weighing).table
 
     pool = pooled()
     assert pooled(weighing="pool") == pool
@@ -302,10 +294,7 @@ def test_a_persons_few_ticks_leave_a_row_the_demo_pins_as_it_was(read: Read, ref
     than a row needs (``min_samples``) while the demo's own row has that many stays bit for bit;
     every other row the person drove is estimated again on the pooled ticks. Over several
     stretches, so both kinds of row come up."""
-    from lfdfuse.estimate.pooled_subgoals import pool_subgoals
-    from lfdfuse.estimate.sub_step_corrections import FurtherDemo
-
-    run, track, paper = read.run, read.track, read.paper
+    run = read.run
     table = refined.table
     (d,) = [d for d in refined.decisions if table.network.steps[d.segment].name == "reach-green"]
     seg = run.segments[d.segment]
@@ -316,15 +305,7 @@ def test_a_persons_few_ticks_leave_a_row_the_demo_pins_as_it_was(read: Read, ref
         person = np.zeros(len(run.t_ns), dtype=bool)
         person[lo : seg.stop] = True
         fix = replace(run, informative=run.informative & person)
-        pooled = pool_subgoals(
-            first=run,
-            first_name="demo",
-            paper=paper,
-            table=table,
-            decisions=refined.decisions,
-            others=[FurtherDemo("fix", fix, track, correction=True, steps=steps)],
-            opts=OPTS,
-        ).table
+        pooled = read.pool(table, refined.decisions, fix, steps=steps).table
         (new,) = [s for n, s in named_leaf_steps(pooled) if n == "reach-green/reach-green"]
         rows = {r.bac: r for r in new.fusion}
         added = np.bincount(run.bac[fix.informative], minlength=max(rows) + 1)
@@ -346,10 +327,7 @@ def test_a_corrections_turn_off_inside_a_sub_step_becomes_a_decision_of_that_sub
     person's turn becomes a decision of that sub-step, its landmark counted from where the
     network entered it — the demo's own, since that is reach-green's start — and inserted before
     it; the table's sub-goals and every row the person did not drive stay bit for bit."""
-    from lfdfuse.estimate.pooled_subgoals import pool_subgoals
-    from lfdfuse.estimate.sub_step_corrections import FurtherDemo
-
-    run, track, paper, table = read.run, read.track, read.paper, refined.table
+    run, table = read.run, refined.table
     (d,) = [d for d in refined.decisions if table.network.steps[d.segment].name == "reach-green"]
     far = replace(d, odometry_m=d.odometry_m + 30.0)
     decisions = tuple(far if x == d else x for x in refined.decisions)
@@ -359,15 +337,7 @@ def test_a_corrections_turn_off_inside_a_sub_step_becomes_a_decision_of_that_sub
     person = np.zeros(len(run.t_ns), dtype=bool)
     person[seg.start : seg.stop] = True
     fix = replace(run, informative=run.informative & person)
-    res = pool_subgoals(
-        first=run,
-        first_name="demo",
-        paper=paper,
-        table=table,
-        decisions=decisions,
-        others=[FurtherDemo("fix", fix, track, correction=True, steps=tuple(steps))],
-        opts=OPTS,
-    )
+    res = read.pool(table, decisions, fix, steps=tuple(steps))
     (added,) = [v for v in res.verdicts if v.kind == "added"]
     assert added.step == "reach-green/reach-green" and added.demos == ("fix",)
     got = added.decision
@@ -402,22 +372,10 @@ def test_a_corrections_turns_at_corners_are_decisions_only_when_asked(
     and the teacher's corners too (the way ahead and the other side closed: there was no other
     way, but a person who took over had — their network drove on). A teacher's demo pooled is
     read as before either way: the option reads corrections only."""
-    from lfdfuse.estimate.pooled_subgoals import pool_subgoals
-    from lfdfuse.estimate.sub_step_corrections import FurtherDemo
-
-    run, track, paper = read.run, read.track, read.paper
+    run, paper = read.run, read.paper
 
     def pooled(correction: bool, **corners: bool) -> tuple[FusionTable, list[tuple[str, DecisionPoint]]]:
-        res = pool_subgoals(
-            first=run,
-            first_name="demo",
-            paper=paper,
-            table=paper,
-            decisions=(),
-            others=[FurtherDemo("fix", run, track, correction=correction)],
-            opts=OPTS,
-            **corners,
-        )
+        res = read.pool(paper, (), run, correction=correction, **corners)
         return res.table, [(v.kind, v.decision) for v in res.verdicts]
 
     plain = pooled(True)

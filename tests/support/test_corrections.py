@@ -33,6 +33,27 @@ def _line(a: tuple[float, float], b: tuple[float, float]) -> np.ndarray:
 
 
 TEACHER = np.concatenate([_line((0.0, 0.0), (20.0, 0.0)), [[20.0, 0.0]]])
+#: into a dead end at 8 m the teacher passed by, round, back the way it came and a lap later along
+#: the path
+DEAD_END_LAP = np.concatenate(
+    [
+        _line((0.0, 0.0), (8.0, 0.0)),
+        _line((8.0, 0.0), (8.0, DEAD_END_M)),
+        _line((8.0, DEAD_END_M), (8.0, 0.0)),
+        _line((8.0, 0.0), (0.0, 0.0)),
+        _line((0.0, 0.0), (20.0, 0.0)),
+    ]
+)
+#: into that dead end, back out and on along the path
+DEAD_END_AND_ON = np.concatenate(
+    [
+        _line((0.0, 0.0), (8.0, 0.0)),
+        _line((8.0, 0.0), (8.0, DEAD_END_M)),
+        _line((8.0, DEAD_END_M), (8.0, 0.0)),
+        _line((8.0, 0.0), (20.0, 0.0)),
+        [[20.0, 0.0]],
+    ]
+)
 
 
 def test_a_robot_that_follows_the_path_within_the_corridor_is_not_corrected() -> None:
@@ -53,15 +74,7 @@ def test_a_robot_that_comes_back_from_a_dead_end_the_wrong_way_is_taken_over_at_
     # into a dead end the teacher passed by, round, back the way it came and, a lap later, along
     # the path: the points it meets after the lap are not followed; the person takes over
     # before the dead end
-    lap = np.concatenate(
-        [
-            _line((0.0, 0.0), (8.0, 0.0)),
-            _line((8.0, 0.0), (8.0, DEAD_END_M)),
-            _line((8.0, DEAD_END_M), (8.0, 0.0)),
-            _line((8.0, 0.0), (0.0, 0.0)),
-            _line((0.0, 0.0), (20.0, 0.0)),
-        ]
-    )
+    lap = DEAD_END_LAP
     assert DEAD_END_M > LEAVE_M
     plan = correction_plan(TEACHER, lap, DT_S)
     assert plan is not None
@@ -71,15 +84,7 @@ def test_a_robot_that_comes_back_from_a_dead_end_the_wrong_way_is_taken_over_at_
 
 
 def test_a_robot_that_turns_round_in_a_dead_end_and_drives_on_is_not_corrected() -> None:
-    out_and_on = np.concatenate(
-        [
-            _line((0.0, 0.0), (8.0, 0.0)),
-            _line((8.0, 0.0), (8.0, DEAD_END_M)),
-            _line((8.0, DEAD_END_M), (8.0, 0.0)),
-            _line((8.0, 0.0), (20.0, 0.0)),
-            [[20.0, 0.0]],
-        ]
-    )
+    out_and_on = DEAD_END_AND_ON
     assert correction_plan(TEACHER, out_and_on, DT_S) is None
 
 
@@ -110,15 +115,7 @@ def test_a_robot_that_follows_the_path_and_hits_a_wall_is_taken_over_before_it()
 def test_a_robot_that_left_the_path_before_it_hit_a_wall_keeps_that_takeover() -> None:
     # into a dead end (as above), where it hits the wall at the end: the person takes over at
     # the mouth, where it left the path, and a wall hit before it left is taken over there
-    lap = np.concatenate(
-        [
-            _line((0.0, 0.0), (8.0, 0.0)),
-            _line((8.0, 0.0), (8.0, DEAD_END_M)),
-            _line((8.0, DEAD_END_M), (8.0, 0.0)),
-            _line((8.0, 0.0), (0.0, 0.0)),
-            _line((0.0, 0.0), (20.0, 0.0)),
-        ]
-    )
+    lap = DEAD_END_LAP
     left = correction_plan(TEACHER, lap, DT_S)
     assert left is not None
     in_dead_end = int(np.argmax(lap[:, 1]))
@@ -134,15 +131,7 @@ def test_a_robot_that_hits_a_wall_in_a_dead_end_it_came_back_out_of_is_taken_ove
     # into a dead end the teacher passed by, against its end wall, back out and on along the
     # path (not corrected alone): the person takes over before the robot turned off the path
     # and drives the path on past the dead end's mouth
-    out_and_on = np.concatenate(
-        [
-            _line((0.0, 0.0), (8.0, 0.0)),
-            _line((8.0, 0.0), (8.0, DEAD_END_M)),
-            _line((8.0, DEAD_END_M), (8.0, 0.0)),
-            _line((8.0, 0.0), (20.0, 0.0)),
-            [[20.0, 0.0]],
-        ]
-    )
+    out_and_on = DEAD_END_AND_ON
     assert correction_plan(TEACHER, out_and_on, DT_S) is None
     plan = correction_plan(TEACHER, out_and_on, DT_S, hit_at=int(np.argmax(out_and_on[:, 1])))
     assert plan is not None
