@@ -60,6 +60,7 @@ from __future__ import annotations
 from collections.abc import Callable, Collection, Iterator, Sequence
 from dataclasses import dataclass, replace
 
+from lfdfuse.behaviors.catalogue import safe_default
 from lfdfuse.estimate.pooled_rows import Weighing
 from lfdfuse.execute.check import DemoWorld, drive
 from lfdfuse.network.table import FusionTable, Network, Step
@@ -220,15 +221,43 @@ def _ladder(
     table made when reached; a table tried before (the reading moved no row or step of it) is
     not tried again."""
     yield from pooled
-    if reread is None:
-        return
     seen = [before.network, *(t.network for _, t in pooled)]
-    for reading in LADDER:
-        table = reread(reading)
-        if table.network in seen:
+    tried = list(pooled)
+    if reread is not None:
+        for reading in LADDER:
+            table = reread(reading)
+            if table.network in seen:
+                continue
+            seen.append(table.network)
+            tried.append((reading.name, table))
+            yield reading.name, table
+    for name, table in tried:
+        safe = safe_defaults(table)
+        if safe.network in seen:
             continue
-        seen.append(table.network)
-        yield reading.name, table
+        seen.append(safe.network)
+        yield f"{name}, unseen BACs driven safely", safe
+
+
+def safe_defaults(table: FusionTable) -> FusionTable:
+    """``table`` with every step's default weights (and the table's) made safe
+    (:func:`~lfdfuse.behaviors.catalogue.safe_default`)."""
+    names = table.behaviors
+
+    def walk(net: Network) -> Network:
+        steps = []
+        for st in net.steps:
+            if st.network is not None:
+                st = replace(st, network=walk(st.network))
+            elif st.default_weights is not None:
+                st = replace(st, default_weights=safe_default(st.default_weights, names))
+            steps.append(st)
+        return replace(net, steps=tuple(steps))
+
+    top = safe_default(table.default_weights, names)
+    return replace(
+        table, network=walk(table.network), default_weights=top if top is not None else table.default_weights
+    )
 
 
 def _count(done: Sequence[bool], base: Sequence[bool]) -> str:
