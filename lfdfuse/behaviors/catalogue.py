@@ -112,17 +112,15 @@ def default_weights_for(behaviors: list[str] | tuple[str, ...]) -> dict[str, flo
     return w
 
 
-def safe_default(fit: dict[str, float] | None, behaviors: Sequence[str]) -> dict[str, float] | None:
-    """A default fit made safe for the BACs it stands in for: the fixed behaviours (``avoid``,
-    ``sonar_avoid``) weigh at least their default role's weight.
+def safe_default(weights: dict[str, float], behaviors: Sequence[str]) -> dict[str, float]:
+    """Weights for BACs never seen in training made safe: the fixed behaviours (``avoid``,
+    ``sonar_avoid``) weigh at least their default role's weight (the others as they were).
 
-    A fit to the teacher's heading over a whole step leaves ``avoid`` near 0 (a teacher seldom
-    needed it), and a BAC never seen in training is most often a robot somewhere the teacher
-    never drove, near a wall. None stays None (no fit: the table's default drives).
+    A step's default fit to the teacher's heading leaves ``avoid`` near 0 (the teacher seldom
+    needed it), and a BAC never seen in training is most often a robot where the teacher never
+    drove, near a wall.
     """
-    if fit is None:
-        return None
-    out = dict(fit)
+    out = dict(weights)
     for s in CATALOGUE:
         if not s.family and s.default_role == "fixed" and s.name in behaviors:
             out[s.name] = max(out.get(s.name, 0.0), s.default_weight)
