@@ -219,7 +219,8 @@ def _learn_subgoals_pooled(
     learned (and checked) as alone, the others' decisions matched to its, their rows pooled; with
     a correction, the lesson checked in the demo's world (:mod:`lfdfuse.execute.lesson_check`: the
     correction read again — its ticks weighing more, its turns read at corners too — estimated
-    only if no pooled lesson is taken; the verdicts and decisions are the table's taken)."""
+    only if no pooled lesson is taken, then each lesson with its unseen BACs driven safely; the
+    verdicts and decisions are the table's taken)."""
     read = [read_segmented_and_run(d) for d in demos]
     runs = [run for run, _ in read]
     why = same_behaviors(runs, names)
