@@ -32,7 +32,7 @@ from lfdfuse.execute.repair import Amends, Repair, repair
 from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.log.reader import Run
 from lfdfuse.network.changes import step_changes
-from lfdfuse.network.table import FusionTable, leaf_steps
+from lfdfuse.network.table import FusionTable, leaf_steps, safe_defaults
 from lfdfuse.progress import Progress, part, tell
 from lfdfuse.robot.pose import Pose
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
@@ -286,8 +286,10 @@ def _learn_subgoals_pooled(
             reread=reread,
         )
         built = checked.table
-        # a table read again taken: its verdicts (with the turns read at corners, its decisions)
-        res = next((m for m in made if m.table is built), res)
+        # a table read again taken (or made safe): its verdicts (with the turns read at corners,
+        # its decisions)
+        if built is not res.table and built != safe_defaults(res.table):
+            res = next((m for m in made if m.table is built or safe_defaults(m.table) == built), res)
     tell(progress, 1.0, 1.0)
     return LearnResult(built, groups, skipped, res.decisions, tuple(names), fixed, res.verdicts, checked)
 
