@@ -32,7 +32,7 @@ from lfdfuse.execute.repair import Amends, Repair, repair
 from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.log.reader import Run
 from lfdfuse.network.changes import step_changes
-from lfdfuse.network.table import FusionTable, leaf_steps
+from lfdfuse.network.table import FusionTable, leaf_steps, safe_defaults
 from lfdfuse.progress import Progress, part, tell
 from lfdfuse.robot.pose import Pose
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
@@ -219,7 +219,8 @@ def _learn_subgoals_pooled(
     learned (and checked) as alone, the others' decisions matched to its, their rows pooled; with
     a correction, the lesson checked in the demo's world (:mod:`lfdfuse.execute.lesson_check`: the
     correction read again — its ticks weighing more, its turns read at corners too — estimated
-    only if no pooled lesson is taken; the verdicts and decisions are the table's taken)."""
+    only if no pooled lesson is taken, then each lesson with its unseen BACs driven safely; the
+    verdicts and decisions are the table's taken)."""
     read = [read_segmented_and_run(d) for d in demos]
     runs = [run for run, _ in read]
     why = same_behaviors(runs, names)
@@ -285,8 +286,10 @@ def _learn_subgoals_pooled(
             reread=reread,
         )
         built = checked.table
-        # a table read again taken: its verdicts (with the turns read at corners, its decisions)
-        res = next((m for m in made if m.table is built), res)
+        # a table read again taken (or made safe): its verdicts (with the turns read at corners,
+        # its decisions)
+        if built is not res.table and built != safe_defaults(res.table):
+            res = next((m for m in made if m.table is built or safe_defaults(m.table) == built), res)
     tell(progress, 1.0, 1.0)
     return LearnResult(built, groups, skipped, res.decisions, tuple(names), fixed, res.verdicts, checked)
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
+from collections.abc import Sequence
 
 from lfdfuse.behaviors import library
 from lfdfuse.behaviors.spec import ATTRACT, BehaviorSpec, Input, attract_target
@@ -109,6 +110,21 @@ def default_weights_for(behaviors: list[str] | tuple[str, ...]) -> dict[str, flo
     if not w:
         w = {b: 1.0 for b in behaviors}
     return w
+
+
+def safe_default(weights: dict[str, float], behaviors: Sequence[str]) -> dict[str, float]:
+    """Weights for BACs never seen in training made safe: the fixed behaviours (``avoid``,
+    ``sonar_avoid``) weigh at least their default role's weight (the others as they were).
+
+    A step's default fit to the teacher's heading leaves ``avoid`` near 0 (the teacher seldom
+    needed it), and a BAC never seen in training is most often a robot where the teacher never
+    drove, near a wall.
+    """
+    out = dict(weights)
+    for s in CATALOGUE:
+        if not s.family and s.default_role == "fixed" and s.name in behaviors:
+            out[s.name] = max(out.get(s.name, 0.0), s.default_weight)
+    return out
 
 
 def name_pattern() -> str:

@@ -157,7 +157,7 @@ def decisions_of(
     heading from before the corner, see its far wall ahead), and read as a corner the person's
     turn into it re-weights rows only. But a corner the person cut reads as a turn-off too (a
     decision added where there was no choice), so it is off unless asked for (the lesson
-    ladder's last rung, :mod:`lfdfuse.execute.lesson_check`)."""
+    ladder's corners rung, :mod:`lfdfuse.execute.lesson_check`)."""
     run = demo.run
     mapped = replace(run, segment_of=np.asarray(step_of, dtype=np.int64)[run.segment_of])
     fused = fused_vectors(paper, mapped, np.arange(len(run.t_ns)))

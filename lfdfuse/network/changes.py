@@ -2,7 +2,8 @@
 
 :func:`step_changes` compares two tables of one task goal step by goal step (top-level steps
 by name): a step whose sub-goals differ is written out as its new landmark steps, a step with
-the same leaves as the rows it re-weights or adds. Steps that did not change say nothing.
+the same leaves as the rows it re-weights or adds; either says in how many of its steps the
+weights for unseen BACs changed. Steps that did not change say nothing.
 """
 
 from __future__ import annotations
@@ -40,20 +41,22 @@ def step_changes(old: FusionTable, new: FusionTable) -> list[str]:
             continue
         a, b = _leaves(was), _leaves(step)
         changed = new_rows = 0
+        old_by = dict(a)
+        safer = sum(1 for n, y in b if n in old_by and y.default_weights != old_by[n].default_weights)
+        unseen = f"; its weights for unseen BACs changed in {safer} step(s)" if safer else ""
         if [n for n, _ in a] == [n for n, _ in b] and all(
             x.landmark == y.landmark for (_, x), (_, y) in zip(a, b, strict=False)
         ):
             for (_, x), (_, y) in zip(a, b, strict=True):
                 c, n = _rows(x, y)
                 changed, new_rows = changed + c, new_rows + n
-            if changed or new_rows:
-                lines.append(f"{step.name}: re-weights {changed} row(s), adds {new_rows} row(s)")
+            if changed or new_rows or safer:
+                lines.append(f"{step.name}: re-weights {changed} row(s), adds {new_rows} row(s){unseen}")
             continue
-        old_by = dict(a)
         for name, y in b:
             if name in old_by:
                 c, n = _rows(old_by[name], y)
                 changed, new_rows = changed + c, new_rows + n
         rows = f"; {changed} row(s) re-weighted, {new_rows} added" if changed or new_rows else ""
-        lines.append(f"{step.name}: now {_landmarks(b)}{rows}")
+        lines.append(f"{step.name}: now {_landmarks(b)}{rows}{unseen}")
     return lines

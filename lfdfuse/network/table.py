@@ -6,7 +6,7 @@ the problem (``network.steps[1].fusion[0].weights.avoid: negative weight``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -107,6 +107,26 @@ class FusionTable:
             if g not in need:
                 need.append(g)
         return need
+
+
+def safe_defaults(t: FusionTable) -> FusionTable:
+    """``t`` with the weights for unseen BACs made safe, the table's and every step's
+    (:func:`~lfdfuse.behaviors.catalogue.safe_default`: ``avoid`` at least at its default role's
+    weight); every row as it was."""
+
+    def walk(net: Network) -> Network:
+        steps = []
+        for st in net.steps:
+            if st.network is not None:
+                st = replace(st, network=walk(st.network))
+            if st.default_weights is not None:
+                st = replace(st, default_weights=catalogue.safe_default(st.default_weights, t.behaviors))
+            steps.append(st)
+        return replace(net, steps=tuple(steps))
+
+    return replace(
+        t, default_weights=catalogue.safe_default(t.default_weights, t.behaviors), network=walk(t.network)
+    )
 
 
 def default_weights_for(behaviors: list[str] | tuple[str, ...]) -> dict[str, float]:

@@ -5,7 +5,9 @@ where the robot left the path: the last point of the teacher's path it met in or
 :func:`lfdfuse.execute.check.follow` counts them) before it strayed :data:`LEAVE_M` from the
 stretch of the path since (into a dead end the teacher passed by, round the wrong way) or took
 :data:`STALL_S` to meet the next (dithering): a point it meets only after coming back is not
-followed. Where the teacher reached a goal the robot reached too, the points within
+followed. A robot that strayed and came back to the path within :data:`STRAY_S` and drove on
+along it is not corrected there; one that came back later was lost there (a person watching
+would not have waited). Where the teacher reached a goal the robot reached too, the points within
 :data:`GOAL_M` of it need not be met (the robot reaches a goal from where its camera sees it);
 a robot that met the path past a goal before it reached it (only coming round again) missed it
 there, and so did a robot that met the path all the way but never reached a goal on it (drove
@@ -60,6 +62,9 @@ RADIUS_M = 1.0  # a path point is met within this (as the check's)
 LEAVE_M = 2.5
 #: or where it took this long (s) from one point of the path to the next (stalled, dithering)
 STALL_S = 20.0
+#: a robot that strayed from the path and came back to it later than this (s) was lost there (a
+#: person watching takes over where it turned off): one that came back sooner drove on
+STRAY_S = 20.0
 #: the teacher's path this near (m) where it reached a goal need not be met: a robot reaches the
 #: goal from where its camera sees it, and turns back from there
 GOAL_M = 1.5
@@ -159,7 +164,11 @@ def correction_plan(
             met.append((i, t))
             k += 1
             continue
-        back = _resumed(teacher_xy, robot_xy, pts, k, arc, t + out, stall) if out < stall else None
+        back = (
+            _resumed(teacher_xy, robot_xy, pts, k, arc, t + out, stall, round(STRAY_S / dt_s))
+            if out < stall
+            else None
+        )
         if back is None:
             missed = i
             break
@@ -239,14 +248,15 @@ def _resumed(
     arc: np.ndarray,
     t: int,
     stall: int,
+    stray: int,
 ) -> tuple[int, int] | None:
     """A robot that strayed at tick ``t`` from the path before point ``pts[k]``: where it came back
-    to the last point it met and drove on along the path from there (``(point index, tick)`` of
-    the first point :data:`RESUME_M` further on, met within ``stall`` ticks of coming back without
-    straying again), or None (it went elsewhere)."""
+    to the last point it met, within ``stray`` ticks, and drove on along the path from there
+    (``(point index, tick)`` of the first point :data:`RESUME_M` further on, met within ``stall``
+    ticks of coming back without straying again), or None (it went elsewhere, or was lost)."""
     last = teacher_xy[pts[k - 1]] if k else teacher_xy[pts[0]]
     near = np.nonzero(np.hypot(*(robot_xy[t:] - last).T) < RADIUS_M)[0]
-    if not len(near):
+    if not len(near) or near[0] > stray:
         return None
     t += int(near[0])
     ahead = [j for j in range(k, len(pts)) if arc[pts[j]] >= arc[pts[max(k - 1, 0)]] + RESUME_M]

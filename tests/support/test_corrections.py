@@ -16,6 +16,7 @@ from tests.support.corrections import (
     LEAVE_M,
     PAST_M,
     STALL_S,
+    STRAY_S,
     STUCK_S,
     CorrectionPlan,
     PathPerson,
@@ -24,7 +25,7 @@ from tests.support.corrections import (
 
 DT_S = 0.1
 STEP_M = 0.04  # 0.4 m/s
-DEAD_END_M = 6.0
+DEAD_END_M = 4.0  # in and out again in 20 s at 0.4 m/s: not lost there
 
 
 def _line(a: tuple[float, float], b: tuple[float, float]) -> np.ndarray:
@@ -86,6 +87,27 @@ def test_a_robot_that_comes_back_from_a_dead_end_the_wrong_way_is_taken_over_at_
 def test_a_robot_that_turns_round_in_a_dead_end_and_drives_on_is_not_corrected() -> None:
     out_and_on = DEAD_END_AND_ON
     assert correction_plan(TEACHER, out_and_on, DT_S) is None
+
+
+def test_a_robot_lost_in_a_dead_end_is_taken_over_where_it_turned_off_though_it_came_back() -> None:
+    # into the dead end, half a minute to and fro at its end wall, back out and on along the path
+    dither = np.concatenate(
+        [_line((8.0, DEAD_END_M), (8.0, DEAD_END_M - 0.3)), _line((8.0, DEAD_END_M - 0.3), (8.0, DEAD_END_M))]
+        * 20
+    )
+    lost = np.concatenate(
+        [
+            DEAD_END_AND_ON[: int(np.argmax(DEAD_END_AND_ON[:, 1]))],
+            dither,
+            DEAD_END_AND_ON[int(np.argmax(DEAD_END_AND_ON[:, 1])) :],
+        ]
+    )
+    assert len(dither) * DT_S > STRAY_S
+    plan = correction_plan(TEACHER, lost, DT_S)
+    assert plan is not None
+    x_take, y_take = lost[round(plan.take_s / DT_S)]
+    assert 6.0 < x_take <= 8.0 and y_take < 0.5  # before the mouth, not inside
+    assert plan.path_xy[0, 0] <= 8.0 and plan.path_xy[-1, 0] > 8.0 + PAST_M - 1.0
 
 
 def test_a_robot_that_dithers_is_taken_over_where_it_stalled() -> None:
