@@ -335,8 +335,9 @@ def _decision(
     end = d + 1 + int(reach[0]) if len(reach) else hi
     if must and end + p.min_steps >= hi:
         # the goal came while the teacher still turned: the turn as far as it went a
-        # moment before the goal, the rest that moment
-        end = hi - p.min_steps
+        # moment before the goal, the rest that moment; a goal beyond the turn's window (the
+        # teacher turned less than a decision's least turn there): as far as it went in it
+        end = min(hi - p.min_steps, look - 1)
         if end <= d + 1:
             return None
         angle = float(from_held[end - d])
