@@ -3,11 +3,11 @@
 Generated world 3149 (a ring corridor, green at the end of a spur off its east side): the table
 learned with sub-goals from the three-goal demo completes from three of four starts; from the
 other it drives out of green's spur, up the east corridor, and turns back at its far corner: a
-third of its ticks there are in a BAC the reach-blue step never saw, where the step's default
+quarter of its ticks there are in BACs the reach-blue step never saw, where the step's default
 weights (a fit to the teacher, ``avoid`` near 0) drive it. A scripted person
 (:mod:`tests.support.corrections`) takes over as it comes out of the spur and drives the teacher's
-path on; every lesson on the ladder keeps the robot turning back at that corner, until the whole
-lesson is tried with its unseen BACs driven safely (``avoid`` at its default weight,
+path on; no lesson on the ladder passes the lesson check (checked in the demo's world) until the
+whole lesson is tried with its unseen BACs driven safely (``avoid`` at its default weight,
 :func:`lfdfuse.network.table.safe_defaults`): the robot takes the corner and the table completes
 from all four starts (measured; ~11 s).
 """
