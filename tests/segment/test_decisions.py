@@ -338,6 +338,31 @@ def test_a_forced_turn_the_goal_cuts_short_ends_before_the_goal() -> None:
 
 
 @settings(max_examples=30, deadline=None)
+@given(st.floats(10.0, 30.0), st.floats(45.0, 75.0))
+def test_a_forced_turn_whose_goal_lies_beyond_its_window_is_read_within_it(right: float, left: float) -> None:
+    """A forced turn that turned less than a decision's least turn from the heading the sectors
+    held (a little right first, the sectors held on, then left), its goal far beyond the turn's
+    window: read within the window, where it is no decision (read at the goal, past the
+    window's headings, it was an index error)."""
+    assume(left - right < math.degrees(DecisionParams().min_angle_rad) - 1.0)
+    turn = np.zeros(N)
+    turn[20:30] = -math.radians(right) / 10
+    turn[40:50] = math.radians(left) / 10
+    heading = np.cumsum(turn)
+    held = np.where((np.arange(N) >= 20) & (np.arange(N) < 56), heading, 0.0)  # held again after
+    onsets = np.zeros((N, 2), dtype=bool)
+    onsets[38, 0] = True
+    ranges = np.full((N, 3), 8.0)
+    ranges[:, 1] = 2.0
+    track = LandmarkTrack(onsets, np.full(N, 0.04), turn, held, ranges, GEOM, OpeningParams())
+    demo = np.stack([np.cos(heading), np.sin(heading)], axis=1)
+    ok = np.ones(N, bool)
+    assert (
+        find_decisions(segments=SEGS, demo=demo, informative=ok, fused=demo, track=track, forced=[45]) == []
+    )
+
+
+@settings(max_examples=30, deadline=None)
 @given(st.sampled_from([0, 1]), st.integers(30, 60), st.floats(50.0, 80.0), st.integers(10, 24))
 def test_a_corner_taken_in_two_is_a_decision_only_when_forced(
     side: int, start: int, deg: float, steps: int
