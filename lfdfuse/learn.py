@@ -32,7 +32,7 @@ from lfdfuse.execute.repair import Amends, Repair, repair
 from lfdfuse.execute.run import ExecuteOptions, run_table
 from lfdfuse.log.reader import Run
 from lfdfuse.network.changes import step_changes
-from lfdfuse.network.table import FusionTable, leaf_steps, safe_defaults
+from lfdfuse.network.table import FusionTable, leaf_steps
 from lfdfuse.progress import Progress, part, tell
 from lfdfuse.robot.pose import Pose
 from lfdfuse.segment.decisions import DecisionParams, DecisionPoint
@@ -265,11 +265,11 @@ def _learn_subgoals_pooled(
 
     res = pooled()
     built, checked = res.table, None
-    made: list[PooledSubgoals] = []  # the tables of the correction read again, as made
+    made: dict[Rereading, PooledSubgoals] = {}  # the correction read again, as made
 
     def reread(reading: Rereading) -> FusionTable:
-        made.append(pooled(reading))
-        return made[-1].table
+        made[reading] = pooled(reading)
+        return made[reading].table
 
     if home is not None and options.check_starts is not None and any(o.correction for o in others):
         checked = checked_lesson(
@@ -288,8 +288,8 @@ def _learn_subgoals_pooled(
         built = checked.table
         # a table read again taken (or made safe): its verdicts (with the turns read at corners,
         # its decisions)
-        if built is not res.table and built != safe_defaults(res.table):
-            res = next((m for m in made if m.table is built or safe_defaults(m.table) == built), res)
+        if checked.reading is not None:
+            res = made[checked.reading]
     tell(progress, 1.0, 1.0)
     return LearnResult(built, groups, skipped, res.decisions, tuple(names), fixed, res.verdicts, checked)
 

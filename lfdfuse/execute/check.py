@@ -151,18 +151,10 @@ def drive(table: FusionTable, world: World, start: Pose, max_time_s: float, seed
     return Drive(len(s.reached), s.collisions, s.poses)
 
 
-def rollout(
-    table: FusionTable, world: World, start: Pose, max_time_s: float, seed: int = 0
-) -> tuple[int, np.ndarray]:
-    """Goals reached and poses ``(n, 3)`` of the table driven from ``start`` (noise-free sensing)."""
-    d = drive(table, world, start, max_time_s, seed)
-    return d.goals, d.poses
-
-
 def check(table: FusionTable, world: World, start: Pose, teacher_xy: np.ndarray, max_time_s: float) -> Check:
-    goals, poses = rollout(table, world, start, max_time_s)
-    met, missed, last = follow(teacher_xy, poses[:, :2])
-    return Check(goals, met, len(path_points(teacher_xy)), missed, last)
+    d = drive(table, world, start, max_time_s)
+    met, missed, last = follow(teacher_xy, d.poses[:, :2])
+    return Check(d.goals, met, len(path_points(teacher_xy)), missed, last)
 
 
 def score(checks: Sequence[Check]) -> tuple[int, int]:

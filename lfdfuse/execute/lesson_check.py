@@ -122,6 +122,8 @@ class CheckedLesson:
     table: FusionTable
     lesson: str | None
     why: str
+    #: the reading of the correction the table taken was made from (None: the pooled one)
+    reading: Rereading | None = None
 
     def describe(self) -> str:
         took = "the table before (the correction not taken)" if self.lesson is None else self.lesson
@@ -206,7 +208,7 @@ def checked_lesson(
 
     base = outcomes(before, starts)
     kept_starts = False
-    for name, table in _ladder(before, tried, reread):
+    for name, table, reading in _ladder(before, tried, reread):
         done = outcomes(table, everywhere)
         if not all(d[k] for d, b in zip(done, base, strict=False) for k in (0, 1) if b[k]):
             continue
@@ -215,6 +217,7 @@ def checked_lesson(
                 table,
                 name,
                 f"{_count([d[1] for d in done[: len(starts)]], [b[1] for b in base])}; the correction's start completes",
+                reading,
             )
         kept_starts = True
     if kept_starts:
@@ -226,29 +229,29 @@ def _ladder(
     before: FusionTable,
     pooled: list[tuple[str, FusionTable]],
     reread: Callable[[Rereading], FusionTable] | None,
-) -> Iterator[tuple[str, FusionTable]]:
-    """The lessons in the order tried: ``pooled``, then :data:`LADDER`'s whole lessons, each
-    table made when reached; a table tried before (the reading moved no row or step of it) is
-    not tried again; then each of those with its unseen BACs driven safely, where that changes
-    it."""
-    yield from pooled
+) -> Iterator[tuple[str, FusionTable, Rereading | None]]:
+    """The lessons in the order tried, each with the reading it was made from (None: the pooled
+    one): ``pooled``, then :data:`LADDER`'s whole lessons, each table made when reached; a table
+    tried before (the reading moved no row or step of it) is not tried again; then each of those
+    with its unseen BACs driven safely, where that changes it."""
+    tried: list[tuple[str, FusionTable, Rereading | None]] = [(n, t, None) for n, t in pooled]
+    yield from tried
     seen = [before.network, *(t.network for _, t in pooled)]
-    tried = list(pooled)
     if reread is not None:
         for reading in LADDER:
             table = reread(reading)
             if table.network in seen:
                 continue
             seen.append(table.network)
-            tried.append((reading.name, table))
-            yield reading.name, table
+            tried.append((reading.name, table, reading))
+            yield tried[-1]
     made: list[FusionTable] = []
-    for name, table in tried:
+    for name, table, read_so in tried:
         safe = safe_defaults(table)
         if safe == table or safe in made:
             continue
         made.append(safe)
-        yield f"{name}, {SAFE}", safe
+        yield f"{name}, {SAFE}", safe, read_so
 
 
 def _count(done: Sequence[bool], base: Sequence[bool]) -> str:

@@ -14,7 +14,7 @@ from lfdfuse import learn
 from lfdfuse.estimate.approach import HOMING_RAD, Approach, approach_run, homing_begins, spread
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.estimate.subgoals import refine, track_of
-from lfdfuse.execute.check import demo_world, rollout
+from lfdfuse.execute.check import demo_world, drive
 from lfdfuse.execute.repair import Amends
 from lfdfuse.log.reader import read_run
 from lfdfuse.network.table import FusionRow, Step
@@ -129,7 +129,7 @@ def test_a_goal_driven_past_is_reached_with_the_approach_rows(tmp_path: Path) ->
     (before,), (after,) = rep.checks[0], rep.kept
     assert before.goals == 2 and before.missed_at is None  # the path followed, blue driven past
     assert rep.amends == Amends(approach=(blue,)) and after.goals == 3
-    assert rollout(rep.table, world, home.start, home.max_time_s)[0] == 3
+    assert drive(rep.table, world, home.start, home.max_time_s).goals == 3
     learned = refine(plain, run, track, opts=EstimateOptions()).table
     changed = [
         i

@@ -15,7 +15,7 @@ from lfdfuse import learn
 from lfdfuse.behaviors.openings import OpeningParams
 from lfdfuse.estimate.pipeline import EstimateOptions
 from lfdfuse.estimate.subgoals import refine, track_of
-from lfdfuse.execute.check import Check, demo_world, rollout, score
+from lfdfuse.execute.check import Check, demo_world, drive, score
 from lfdfuse.execute.repair import (
     BLAME_STEPS,
     Amends,
@@ -57,7 +57,7 @@ def test_a_table_that_leaves_the_teacher_in_the_demo_world_is_repaired(tmp_path:
     assert after.goals == 3 and score(rep.kept) > score(rep.checks[0])
     home = demo_world(read_run(demo.segmented), goals=3)
     assert home is not None and home.start.as_tuple() == pytest.approx(world.start)
-    goals, _ = rollout(res.table, world, home.start, home.max_time_s)
+    goals = drive(res.table, world, home.start, home.max_time_s).goals
     assert goals == 3  # the table written is the one checked
     assert res.decisions == rep.decisions and len(rep.describe()) >= 3
 
