@@ -218,9 +218,9 @@ def _learn_subgoals_pooled(
     """Sub-goals from several demos (:mod:`lfdfuse.estimate.pooled_subgoals`): the first demo
     learned (and checked) as alone, the others' decisions matched to its, their rows pooled; with
     a correction, the lesson checked in the demo's world (:mod:`lfdfuse.execute.lesson_check`: the
-    correction read again — its ticks weighing more, its turns read at corners too — estimated
-    only if no pooled lesson is taken, then each lesson with its unseen BACs driven safely; the
-    verdicts and decisions are the table's taken)."""
+    correction read again — its ticks weighed even with the demo's first, alone or its turns read
+    at corners too after the pooled lessons — each estimated only when reached, then each lesson
+    with its unseen BACs driven safely; the verdicts and decisions are the table's taken)."""
     read = [read_segmented_and_run(d) for d in demos]
     runs = [run for run, _ in read]
     why = same_behaviors(runs, names)

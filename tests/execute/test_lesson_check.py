@@ -263,25 +263,50 @@ POOLED_FAIL = {"before": "✓✗✓✗", "whole": "✓✓✓✗", "where taken o
 OK, FAILS_START, MISSES_CORR = "✓✗✓✓", "✗✗✓✓", "✓✗✓✗"
 
 
-def test_the_tables_read_again_are_made_only_when_no_pooled_lesson_is_taken(
+def test_the_even_reading_is_tried_first_and_the_others_only_after_the_pooled_lessons(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     every = dict.fromkeys(READ, OK)
     got, made, _ = _laddered(
         monkeypatch, {"before": "✓✗✓✗", "whole": "✓✓✓✓", "where taken over": "✓✓✓✓"}, every
     )
-    assert got.lesson == "whole" and made == []
+    assert got.lesson == EVEN.name and got.reading == EVEN and made == [EVEN]
+    # the even table misses the correction's start: the pooled lessons, and no other reading made
+    later = {**every, EVEN: MISSES_CORR}
     got, made, _ = _laddered(
-        monkeypatch, {"before": "✓✗✓✗", "whole": "✗✓✓✓", "where taken over": "✓✗✓✓"}, every
+        monkeypatch, {"before": "✓✗✓✗", "whole": "✓✓✓✓", "where taken over": "✓✓✓✓"}, later
     )
-    assert got.lesson == "where taken over" and made == []
+    assert got.lesson == "whole" and got.reading is None and made == [EVEN]
+    got, made, _ = _laddered(
+        monkeypatch, {"before": "✓✗✓✗", "whole": "✗✓✓✓", "where taken over": "✓✗✓✓"}, later
+    )
+    assert got.lesson == "where taken over" and made == [EVEN]
+    # no pooled lesson passes either: on down the readings
+    got, made, _ = _laddered(monkeypatch, POOLED_FAIL, later)
+    assert got.lesson == PERSON.name and made == [EVEN, PERSON]
 
 
-def test_the_ladder_tries_the_persons_ticks_alone_then_even_then_the_turns_read_at_corners() -> None:
-    assert lesson_check.LADDER[:3] == (PERSON, EVEN, CORNERS)
-    assert [r.name for r in lesson_check.LADDER[:3]] == [
-        "whole, the person's ticks alone",
+def test_a_reading_that_is_a_pooled_lesson_is_tried_under_the_pooled_name(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # the person drove no row's worth of ticks in any row: the even table is the pooled whole one
+    got, made, driven = _laddered(
+        monkeypatch,
+        {"before": "✓✗✓✗", "whole": "✓✓✓✓", "where taken over": "✓✓✓✓"},
+        dict.fromkeys(READ, OK),
+        same={EVEN: None},
+    )
+    assert got.lesson == "whole" and got.reading is None and made == [EVEN]
+    assert driven == 3 + 4
+
+
+def test_the_order_of_the_lessons() -> None:
+    assert lesson_check.ORDER == (EVEN, "whole", "where taken over", "steps only", PERSON, CORNERS)
+    assert set(lesson_check.LESSONS) <= set(lesson_check.ORDER)
+    assert lesson_check.LADDER == (EVEN, PERSON, CORNERS)
+    assert [r.name for r in lesson_check.LADDER] == [
         "whole, the person's ticks weighed even with the demo's",
+        "whole, the person's ticks alone",
         "whole, the person's turns read at corners too",
     ]
     assert len({r.name for r in lesson_check.LADDER}) == len(lesson_check.LADDER)
