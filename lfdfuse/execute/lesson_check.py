@@ -51,16 +51,17 @@ bench's worlds, 14 failed from some start against 7), so only where nothing else
 The order is measured on the ``corrections`` bench's failing worlds of seeds 2065–3824 (262),
 every lesson's table driven from the check's starts and the bench's. In this order the even
 lesson is taken in 129 of them (126 fixed), a pooled one in 73 (68), the person's ticks alone in
-8 (8), the turns read at corners in 7 (6), a lesson driven safely in 11 (9), none in 34. Where several lessons pass the check, which one is taken changes the outcome in few worlds,
-most often in a start that completed before failing after (a table marginal where the robot
-turns off for a sub-goal, a coin flip on the exact pose that three check starts do not see): with
-the even lesson first, 7 of the 262 worlds have such a start and 217 are fixed; with the pooled
-lessons first, 12 and 218; with the person's ticks alone first, 11 and 218 (on the 43 failing
-worlds of seeds 3825–4104, measured after, the even and the pooled lessons first give the same). The even table is a
-table of its own in 7 of 10 worlds (in the others no row of the taken-over steps holds a row's
-worth of person ticks). The weighted tables' ``where taken over`` lessons and the corners reading
-with the person's ticks alone were never the first to pass, so
-are not tried (``steps only`` is the pooled one's: a weighing moves no step).
+8 (8), the turns read at corners in 7 (6), a lesson driven safely in 11 (9), none in 34. Where
+several lessons pass the check, which one is taken changes the outcome in few worlds, most often
+in a start that completed before failing after (a table marginal where the robot turns off for a
+sub-goal, a coin flip on the exact pose that three check starts do not see): with the even
+lesson first, 7 of the 262 worlds have such a start and 217 are fixed; with the pooled lessons
+first, 12 and 218; with the person's ticks alone first, 11 and 218 (on the 43 failing worlds of
+seeds 3825–4104, measured after, the even and the pooled lessons first give the same). The even
+table is a table of its own in 7 of 10 worlds (in the others no row of the taken-over steps
+holds a row's worth of person ticks). The weighted tables' ``where taken over`` lessons and the
+corners reading with the person's ticks alone were never the first to pass, so are not tried
+(``steps only`` is the pooled one's: a weighing moves no step).
 
 It takes the first lesson that completes every check start the table before completed and the
 corrections' starts; else none (the table before). A lesson that does not carry the robot
