@@ -6,9 +6,10 @@ names the file and line.
 
 from __future__ import annotations
 
+import errno
 import os
+import secrets
 import stat
-import tempfile
 from enum import Enum
 from pathlib import Path
 from typing import Any
@@ -29,28 +30,60 @@ def write_text_atomic(path: str | Path, text: str) -> None:
     write_bytes_atomic(path, text.encode())
 
 
+#: names drawn for a temp file before giving up (8 random hex digits: a clash is a stale file)
+TEMP_TRIES = 100
+
+
+class TempBeside:
+    """The temp file an output is written to before its rename, in the output's folder
+    (``.NAME.XXXXXXXX.tmp``).
+
+    Its name is known before the file exists (``tempfile.mkstemp`` returns it only once the file
+    is made), so :meth:`remove` finds it whatever interrupts its making: a SIGTERM as the command
+    starts, raised between two lines, leaves nothing behind.
+    """
+
+    def __init__(self, path: Path) -> None:
+        self.folder = path.parent if str(path.parent) else Path(".")
+        self.prefix = f".{path.name}."
+        self.name = ""
+
+    def open(self) -> int:
+        """Create the file, only this process's (mode 0600 until renamed); its descriptor."""
+        flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL  # as mkstemp opens it
+        for extra in ("O_NOFOLLOW", "O_BINARY", "O_CLOEXEC"):
+            flags |= getattr(os, extra, 0)
+        for _ in range(TEMP_TRIES):
+            self.name = str(self.folder / f"{self.prefix}{secrets.token_hex(4)}.tmp")
+            try:
+                return os.open(self.name, flags, 0o600)
+            except FileExistsError:
+                self.name = ""  # another's: never removed as ours
+        raise FileExistsError(errno.EEXIST, "no free temp file name")
+
+    def remove(self) -> None:
+        if self.name and os.path.exists(self.name):
+            os.unlink(self.name)
+
+
 def write_bytes_atomic(path: str | Path, data: bytes) -> None:
     """Write ``data`` to ``path`` atomically (temp file in the folder, fsync, rename)."""
     p = Path(path)
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
         raise LfdError(f"cannot write {p}: folder {parent} does not exist")
+    tmp = TempBeside(p)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=parent)
-    except OSError as exc:
-        raise LfdError(f"cannot write {p}: {exc.strerror}") from exc
-    try:
-        with os.fdopen(fd, "wb") as f:
+        with os.fdopen(tmp.open(), "wb") as f:
             f.write(data)
             f.flush()
             os.fsync(f.fileno())
-        os.chmod(tmp, 0o666 & ~umask())
-        os.replace(tmp, p)
+        os.chmod(tmp.name, 0o666 & ~umask())
+        os.replace(tmp.name, p)
     except OSError as exc:
         raise LfdError(f"cannot write {p}: {exc.strerror}") from exc
     finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+        tmp.remove()
 
 
 #: a YAML file we parse is at most this big (a world of ~100,000 points is ~3 MB; parsing

@@ -21,6 +21,7 @@ from lfdfuse.files import (
     write_bytes_atomic,
     write_text_atomic,
 )
+from lfdfuse.log.writer import LogWriter
 
 # the data YAML files hold: scalars, lists and string-keyed mappings
 scalars = st.none() | st.booleans() | st.integers(-(10**12), 10**12) | st.text(max_size=12)
@@ -41,6 +42,36 @@ def test_atomic_write_round_trips_and_leaves_no_temp_file(tmp_path: Path, data: 
     assert out.read_bytes() == data
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.bin"]
     assert out.stat().st_mode & 0o777 == 0o666 & ~umask()
+
+
+class _Interrupted(BaseException):
+    """A signal raised as an exception (Ctrl-C, the CLI's SIGTERM) between two lines."""
+
+
+def _made_then_interrupted(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``os.open`` makes its file, then a signal comes before its descriptor is returned."""
+    real = os.open
+
+    def open_then_interrupted(path: Any, flags: int, mode: int = 0o777) -> int:
+        real(path, flags, mode)
+        raise _Interrupted
+
+    monkeypatch.setattr(os, "open", open_then_interrupted)
+
+
+@pytest.mark.parametrize("write", ["atomic", "mcap"])
+def test_a_signal_as_the_temp_file_is_made_leaves_nothing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, write: str
+) -> None:
+    _made_then_interrupted(monkeypatch)
+    with pytest.raises(_Interrupted):
+        if write == "atomic":
+            write_bytes_atomic(tmp_path / "out.bin", b"data")
+        else:
+            with LogWriter(tmp_path / "out.mcap", metadata={}):
+                pass
+    monkeypatch.undo()
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_atomic_write_into_a_missing_folder_is_an_lfd_error(tmp_path: Path) -> None:

@@ -6,7 +6,6 @@ import contextlib
 import itertools
 import os
 import struct
-import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from types import TracebackType
@@ -18,7 +17,7 @@ from mcap.writer import CompressionType, Writer
 
 from lfdfuse import __version__
 from lfdfuse.errors import LogError
-from lfdfuse.files import umask
+from lfdfuse.files import TempBeside, umask
 from lfdfuse.log.chunks import BackgroundChunks
 from lfdfuse.log.messages import PROVENANCE, TOPICS, RawMessage
 from lfdfuse.log.schemas import schema_text
@@ -170,24 +169,27 @@ class LogWriter:
         parent = self.path.parent if str(self.path.parent) else Path(".")
         if not parent.is_dir():
             raise LogError(f"cannot write {self.path}: folder {parent} does not exist")
+        tmp = TempBeside(self.path)
+        fd = -1
         try:
-            fd, self._tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".tmp", dir=parent)
-        except OSError as exc:
-            raise LogError(f"cannot write {self.path}: {exc.strerror}") from exc
-        try:
+            fd = tmp.open()
+            self._tmp = tmp.name
             self._stream = os.fdopen(fd, "wb")
             self._writer = Writer(self._stream, compression=CompressionType.ZSTD, chunk_size=CHUNK_SIZE)
             self._writer.start(profile="", library=f"lfdfuse {__version__}")
             # full chunks compressed beside the run (before _Messages, which calls the finaliser)
             self._chunks = BackgroundChunks.of(self._writer)
             self._messages = _Messages.of(self._writer)
-        except BaseException:
+        except BaseException as exc:
             # interrupted here (SIGTERM as the command starts), __exit__ never runs: clean up now
+            # (the temp file's name is known before it is made: whenever the signal came, it goes)
             if self._stream is not None:
                 self._stream.close()
-            else:
+            elif fd >= 0:
                 os.close(fd)
-            os.unlink(self._tmp)
+            tmp.remove()
+            if isinstance(exc, OSError):
+                raise LogError(f"cannot write {self.path}: {exc.strerror}") from exc
             raise
         return self
 
