@@ -248,24 +248,22 @@ def _ladder(
     again, each of those made when reached; a table tried before is not tried again, nor one a
     pooled lesson is (the reading moved no row or step of it: it is tried under the pooled
     lesson's name); then each of those with its unseen BACs driven safely, where that changes it."""
-    tables = dict(pooled)
+    tables = dict(pooled)  # distinct, and each changes ``before`` (:func:`lessons`)
     tried: list[tuple[str, FusionTable, Rereading | None]] = []
-    seen = [before.network]
+    seen = [before.network, *(t.network for t in tables.values())]
     for lesson in ORDER:
         if isinstance(lesson, str):
-            if lesson not in tables:
-                continue
-            name, table, reading = lesson, tables[lesson], None
-        else:
-            if reread is None:
-                continue
-            name, table, reading = lesson.name, reread(lesson), lesson
-            if any(table.network == t.network for t in tables.values()):
-                continue
+            if lesson in tables:
+                tried.append((lesson, tables[lesson], None))
+                yield tried[-1]
+            continue
+        if reread is None:
+            continue
+        table = reread(lesson)
         if table.network in seen:
             continue
         seen.append(table.network)
-        tried.append((name, table, reading))
+        tried.append((lesson.name, table, lesson))
         yield tried[-1]
     made: list[FusionTable] = []
     for name, table, read_so in tried:

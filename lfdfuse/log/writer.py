@@ -157,7 +157,7 @@ class LogWriter:
         self.metadata = metadata
         self.topics = dict(TOPICS) if topics is None else topics
         self._stream: BinaryIO | None = None
-        self._tmp = ""
+        self._tmp = TempBeside(self.path)
         self._writer: Writer | None = None
         self._schemas: dict[Any, int] = {}
         self._channels: dict[str, int] = {}
@@ -169,11 +169,9 @@ class LogWriter:
         parent = self.path.parent if str(self.path.parent) else Path(".")
         if not parent.is_dir():
             raise LogError(f"cannot write {self.path}: folder {parent} does not exist")
-        tmp = TempBeside(self.path)
         fd = -1
         try:
-            fd = tmp.open()
-            self._tmp = tmp.name
+            fd = self._tmp.open()
             self._stream = os.fdopen(fd, "wb")
             self._writer = Writer(self._stream, compression=CompressionType.ZSTD, chunk_size=CHUNK_SIZE)
             self._writer.start(profile="", library=f"lfdfuse {__version__}")
@@ -187,7 +185,7 @@ class LogWriter:
                 self._stream.close()
             elif fd >= 0:
                 os.close(fd)
-            tmp.remove()
+            self._tmp.remove()
             if isinstance(exc, OSError):
                 raise LogError(f"cannot write {self.path}: {exc.strerror}") from exc
             raise
@@ -302,8 +300,8 @@ class LogWriter:
                 self._writer.finish()
             self._stream.close()
             if exc_type is None:
-                os.chmod(self._tmp, 0o666 & ~umask())
-                os.replace(self._tmp, self.path)
+                os.chmod(self._tmp.name, 0o666 & ~umask())
+                os.replace(self._tmp.name, self.path)
         except OSError as err:
             raise LogError(f"cannot write {self.path}: {err.strerror}") from err
         finally:
@@ -312,5 +310,4 @@ class LogWriter:
             if not self._stream.closed:  # finish failed: the file is dropped, its error kept
                 with contextlib.suppress(OSError):
                     self._stream.close()
-            if os.path.exists(self._tmp):
-                os.unlink(self._tmp)
+            self._tmp.remove()
